@@ -3,8 +3,12 @@
 function(thermodrift_module name)
   cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
   file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${name}/*.cpp)
-  if(NOT sources)
-    message(FATAL_ERROR "module ${name} has no sources")
+  if(NOT sources)  # a header-only module
+    add_library(thermodrift_${name} INTERFACE)
+    target_include_directories(thermodrift_${name} INTERFACE ${PROJECT_SOURCE_DIR}/include)
+    target_link_libraries(thermodrift_${name} INTERFACE Eigen3::Eigen fmt::fmt
+                          nlohmann_json::nlohmann_json Threads::Threads ${ARG_DEPS})
+    return()
   endif()
   add_library(thermodrift_${name} STATIC ${sources})
   target_include_directories(thermodrift_${name} PUBLIC ${PROJECT_SOURCE_DIR}/include

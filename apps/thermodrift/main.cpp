@@ -1,0 +1,42 @@
+// thermodrift command line: CLI11 subcommands, one file each. This is the only place
+// where library exceptions become one line on stderr and an exit status (CLI.md).
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <exception>
+
+#include "commands.hpp"
+#include "thermodrift/error.hpp"
+
+int main(int argc, char** argv) {
+  using thermodrift::ExitStatus;
+  CLI::App app{"thermodrift: model and compensate the temperature drift of gyroscopes"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "thermodrift 0.1.0");
+  const auto commands = thermodrift::cli::register_commands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "thermodrift: %s\n", e.what());
+    return static_cast<int>(ExitStatus::usage);
+  }
+  try {
+    return thermodrift::cli::run_selected(commands);
+  } catch (const thermodrift::UsageError& e) {
+    std::fprintf(stderr, "thermodrift: %s\n", e.what());
+    return static_cast<int>(ExitStatus::usage);
+  } catch (const thermodrift::DataError& e) {
+    std::fprintf(stderr, "thermodrift: %s\n", e.what());
+    return static_cast<int>(ExitStatus::bad_data);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "thermodrift: %s\n", e.what());
+    return static_cast<int>(ExitStatus::failure);
+  }
+}
