@@ -1,0 +1,107 @@
+// The feature pipeline: how a log becomes (features, target) for one gyro axis. It is a
+// value stored in the model file, and the one streaming implementation below serves
+// fitting, evaluation and compensation alike, so they can never disagree.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "thermodrift/features/moving_average.hpp"
+#include "thermodrift/io/chamber_log.hpp"
+
+namespace thermodrift {
+
+// One input of a drift model, computed causally from the smoothed temperature T_s.
+struct FeatureTerm {
+  enum class Kind {
+    delta_t,  // "dT":   T_s - reference temperature, °C
+    rate,     // "rate": (T_s(t) - T_s(t - rate_span)) / rate_span, °C/min
+  };
+  Kind kind = Kind::delta_t;
+
+  static FeatureTerm parse(const std::string& text);  // UsageError on an unknown term
+  std::string name() const;
+};
+
+struct Pipeline {
+  static constexpr int kVersion = 1;
+  double smooth_seconds = 100;      // trailing moving-average window on gyro and temperature (seed: 100 s)
+  double rate_span_seconds = 100;   // span of the backward difference giving dT/dt
+  double gap_seconds = 0;           // a time step longer than this restarts the warm-up; 0: smooth_seconds (at least 10 s)
+  std::size_t decimation = 1;       // fitting keeps every k-th ready sample (neighbours of a 100 s mean are near copies)
+  double reference_temperature = 0; // ΔT = T_s - reference, °C; set from the training log
+  std::vector<FeatureTerm> terms{FeatureTerm{FeatureTerm::Kind::delta_t},
+                                 FeatureTerm{FeatureTerm::Kind::rate}};
+
+  // Seconds of history a sample needs before its features are ready.
+  double warm_up_seconds() const { return smooth_seconds + rate_span_seconds; }
+  double effective_gap_seconds() const;
+  std::vector<std::string> term_names() const;
+  void validate() const;  // UsageError on nonsense (negative window, no terms, ...)
+
+  nlohmann::json to_json() const;
+  static Pipeline from_json(const nlohmann::json& json);  // throws Error on a bad value
+};
+
+// Decimation giving about ten samples per smoothing window: neighbours of a 100 s mean
+// carry almost no new information, and SVR cost grows with n².
+std::size_t default_decimation(double smooth_seconds, double sample_interval_seconds);
+
+// Streaming state of the pipeline for one axis: push one sample, read its features.
+class FeatureStream {
+ public:
+  explicit FeatureStream(const Pipeline& pipeline);
+
+  struct Sample {
+    bool ready = false;           // false during warm-up (after the start or a gap)
+    double smoothed_gyro = 0;     // °/h, the drift target
+    double smoothed_temperature = 0;
+    std::span<const double> features;  // one value per pipeline term
+  };
+
+  // `time` must increase; `temperature` is the axis's temperature channel.
+  const Sample& push(double time, double gyro, double temperature);
+  void reset();
+
+ private:
+  struct Stamped {
+    double time;
+    double value;
+  };
+  const Pipeline* pipeline_;
+  TrailingMean gyro_mean_;
+  TrailingMean temperature_mean_;
+  std::vector<Stamped> history_;  // smoothed temperature over the last rate span
+  std::size_t history_head_ = 0;
+  bool started_ = false;
+  double start_time_ = 0;
+  double last_time_ = 0;
+  std::vector<double> features_;
+  Sample sample_;
+};
+
+// Features and target of the ready samples of one axis.
+struct FeatureTable {
+  Eigen::MatrixXd features;       // one row per sample, one column per term
+  Eigen::VectorXd target;         // smoothed gyro, °/h
+  std::vector<double> time;       // s
+  std::vector<double> temperature;  // smoothed, °C
+  std::vector<std::size_t> row;   // index of the log row
+  std::size_t rows() const { return row.size(); }
+};
+
+// Runs the pipeline over one axis of a log. `decimate` applies pipeline.decimation.
+FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log,
+                                 std::size_t gyro_axis, std::size_t temperature_channel,
+                                 bool decimate);
+
+// Appends the rows of `more` to `table` (several logs fitted together).
+void append_rows(FeatureTable& table, const FeatureTable& more);
+
+}  // namespace thermodrift

@@ -1,0 +1,77 @@
+// Row-by-row reader of delimited text logs as serial terminals and data loggers write
+// them: optional UTF-8 BOM, CRLF or LF, comma/semicolon/tab, banner and comment lines,
+// an optional header row. Streaming, so a log larger than memory can be read.
+#pragma once
+
+#include <cstddef>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace thermodrift {
+
+// One data row as it stands in the file.
+struct CsvRow {
+  std::size_t line = 0;  // 1-based line number in the file
+  std::string text;      // the line without its line ending
+  // Each cell as (offset, length) into `text`, trimmed of blanks and of one pair of
+  // double quotes; offsets rather than views so that a row can be moved freely.
+  std::vector<std::pair<std::size_t, std::size_t>> spans;
+
+  std::size_t size() const { return spans.size(); }
+  std::string_view cell(std::size_t index) const {
+    return std::string_view(text).substr(spans[index].first, spans[index].second);
+  }
+};
+
+class CsvReader {
+ public:
+  // Opens `path` and reads up to the first data row to learn the dialect: delimiter,
+  // header, number of columns. Throws DataError if the file cannot be read or holds no
+  // data row.
+  explicit CsvReader(std::string path);
+
+  const std::string& path() const { return path_; }
+  char delimiter() const { return delimiter_; }
+  bool has_header() const { return !header_.empty(); }
+  const std::vector<std::string>& header() const { return header_; }  // empty without one
+  std::size_t column_count() const { return column_count_; }
+  std::size_t header_line() const { return header_line_; }  // 0 without a header
+
+  // The next data row, with exactly column_count() cells, or nothing at the end.
+  // Comment and banner lines are skipped and counted; a row cut short as the first or
+  // the last row of the file is dropped with a warning; any other row of the wrong
+  // length is a DataError naming line and column.
+  std::optional<CsvRow> next();
+
+  std::size_t skipped_comment_lines() const { return skipped_comments_; }
+  // Human-readable warnings gathered so far (skipped lines, dropped cut-short rows).
+  std::vector<std::string> warnings() const;
+
+ private:
+  bool read_line(std::string& line);
+  void learn_dialect();
+  CsvRow split(std::string line, std::size_t line_number) const;
+
+  std::string path_;
+  std::ifstream stream_;
+  std::size_t line_number_ = 0;
+  char delimiter_ = ',';
+  std::vector<std::string> header_;
+  std::size_t header_line_ = 0;
+  std::size_t column_count_ = 0;
+  std::vector<CsvRow> lookahead_;  // data rows read while learning the dialect
+  std::size_t rows_returned_ = 0;
+  std::size_t skipped_comments_ = 0;
+  std::vector<std::string> dropped_rows_;
+};
+
+// Parses one cell as a finite double. Throws DataError(file, line, column) naming the
+// cell when it is empty, not a number, or NaN/Inf.
+double parse_cell(std::string_view cell, const std::string& file, std::size_t line,
+                  std::size_t column);
+
+}  // namespace thermodrift

@@ -1,0 +1,193 @@
+#include "thermodrift/features/pipeline.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+
+FeatureTerm FeatureTerm::parse(const std::string& text) {
+  if (text == "dT") return {Kind::delta_t};
+  if (text == "rate") return {Kind::rate};
+  throw UsageError(fmt::format("unknown feature term '{}' (known: dT, rate)", text));
+}
+
+std::string FeatureTerm::name() const {
+  switch (kind) {
+    case Kind::delta_t: return "dT";
+    case Kind::rate: return "rate";
+  }
+  return "?";
+}
+
+double Pipeline::effective_gap_seconds() const {
+  return gap_seconds > 0 ? gap_seconds : std::max(smooth_seconds, 10.0);
+}
+
+std::vector<std::string> Pipeline::term_names() const {
+  std::vector<std::string> names;
+  for (const auto& term : terms) names.push_back(term.name());
+  return names;
+}
+
+void Pipeline::validate() const {
+  auto finite_nonnegative = [](double value) { return std::isfinite(value) && value >= 0; };
+  if (!finite_nonnegative(smooth_seconds)) {
+    throw UsageError(fmt::format("smoothing window must be >= 0 s, not {}", smooth_seconds));
+  }
+  if (!(std::isfinite(rate_span_seconds) && rate_span_seconds > 0)) {
+    throw UsageError(fmt::format("rate span must be > 0 s, not {}", rate_span_seconds));
+  }
+  if (!finite_nonnegative(gap_seconds)) {
+    throw UsageError(fmt::format("gap threshold must be >= 0 s, not {}", gap_seconds));
+  }
+  if (decimation < 1) throw UsageError("decimation must be at least 1");
+  if (!std::isfinite(reference_temperature)) throw UsageError("reference temperature is not finite");
+  if (terms.empty()) throw UsageError("a pipeline needs at least one feature term");
+}
+
+nlohmann::json Pipeline::to_json() const {
+  return {{"version", kVersion},
+          {"smooth_seconds", smooth_seconds},
+          {"window", "trailing"},
+          {"rate_span_seconds", rate_span_seconds},
+          {"gap_seconds", effective_gap_seconds()},
+          {"decimation", decimation},
+          {"reference_temperature", reference_temperature},
+          {"terms", term_names()}};
+}
+
+Pipeline Pipeline::from_json(const nlohmann::json& json) {
+  if (json.at("version").get<int>() != kVersion) {
+    throw Error(fmt::format("pipeline version {} is not supported (expected {})",
+                            json.at("version").dump(), kVersion));
+  }
+  if (json.at("window").get<std::string>() != "trailing") {
+    throw Error("pipeline window must be \"trailing\"");
+  }
+  Pipeline pipeline;
+  pipeline.smooth_seconds = json.at("smooth_seconds").get<double>();
+  pipeline.rate_span_seconds = json.at("rate_span_seconds").get<double>();
+  pipeline.gap_seconds = json.at("gap_seconds").get<double>();
+  pipeline.decimation = json.at("decimation").get<std::size_t>();
+  pipeline.reference_temperature = json.at("reference_temperature").get<double>();
+  pipeline.terms.clear();
+  for (const auto& term : json.at("terms")) pipeline.terms.push_back(FeatureTerm::parse(term.get<std::string>()));
+  pipeline.validate();
+  return pipeline;
+}
+
+std::size_t default_decimation(double smooth_seconds, double sample_interval_seconds) {
+  if (!(sample_interval_seconds > 0)) return 1;
+  const double per_window = smooth_seconds / sample_interval_seconds;
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(per_window / 10.0)));
+}
+
+FeatureStream::FeatureStream(const Pipeline& pipeline)
+    : pipeline_(&pipeline),
+      gyro_mean_(pipeline.smooth_seconds),
+      temperature_mean_(pipeline.smooth_seconds),
+      history_(),
+      features_(pipeline.terms.size()) {
+  sample_.features = features_;
+}
+
+void FeatureStream::reset() {
+  gyro_mean_.reset();
+  temperature_mean_.reset();
+  history_.clear();
+  history_head_ = 0;
+  started_ = false;
+}
+
+const FeatureStream::Sample& FeatureStream::push(double time, double gyro, double temperature) {
+  if (started_ && time - last_time_ > pipeline_->effective_gap_seconds()) reset();
+  if (!started_) {
+    started_ = true;
+    start_time_ = time;
+  }
+  last_time_ = time;
+  sample_.smoothed_gyro = gyro_mean_.push(time, gyro);
+  const double smoothed = temperature_mean_.push(time, temperature);
+  sample_.smoothed_temperature = smoothed;
+
+  // History of the smoothed temperature over the last rate span: the oldest kept entry
+  // is the last one at or before t - span, so the difference spans at least `span`.
+  // Compacted when half dead, so the cost stays O(1) amortised with no per-sample allocation.
+  const double span = pipeline_->rate_span_seconds;
+  history_.push_back({time, smoothed});
+  while (history_.size() - history_head_ >= 2 && history_[history_head_ + 1].time <= time - span) {
+    ++history_head_;
+  }
+  if (history_head_ > 64 && history_head_ * 2 > history_.size()) {
+    history_.erase(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_));
+    history_head_ = 0;
+  }
+  const Stamped& past = history_[history_head_];
+  const double elapsed = time - past.time;
+  const double rate_per_minute = elapsed > 0 ? (smoothed - past.value) / elapsed * 60.0 : 0.0;
+
+  for (std::size_t i = 0; i < pipeline_->terms.size(); ++i) {
+    switch (pipeline_->terms[i].kind) {
+      case FeatureTerm::Kind::delta_t:
+        features_[i] = smoothed - pipeline_->reference_temperature;
+        break;
+      case FeatureTerm::Kind::rate:
+        features_[i] = rate_per_minute;
+        break;
+    }
+  }
+  sample_.ready = time - start_time_ >= pipeline_->warm_up_seconds();
+  return sample_;
+}
+
+FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log,
+                                 std::size_t gyro_axis, std::size_t temperature_channel,
+                                 bool decimate) {
+  FeatureStream stream(pipeline);
+  const std::size_t step = decimate ? pipeline.decimation : 1;
+  std::vector<double> flat;
+  std::vector<double> target;
+  FeatureTable table;
+  std::size_t ready_count = 0;
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    const auto& sample = stream.push(log.time[i], log.gyro[gyro_axis][i],
+                                     log.temperature[temperature_channel][i]);
+    if (!sample.ready) {
+      ready_count = 0;  // decimation restarts with each warm-up
+      continue;
+    }
+    if (ready_count++ % step != 0) continue;
+    flat.insert(flat.end(), sample.features.begin(), sample.features.end());
+    target.push_back(sample.smoothed_gyro);
+    table.time.push_back(log.time[i]);
+    table.temperature.push_back(sample.smoothed_temperature);
+    table.row.push_back(i);
+  }
+  const auto n = static_cast<Eigen::Index>(table.row.size());
+  const auto d = static_cast<Eigen::Index>(pipeline.terms.size());
+  table.features = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
+                                                  Eigen::RowMajor>>(flat.data(), n, d);
+  table.target = Eigen::Map<const Eigen::VectorXd>(target.data(), n);
+  return table;
+}
+
+void append_rows(FeatureTable& table, const FeatureTable& more) {
+  if (table.rows() == 0) {
+    table = more;
+    return;
+  }
+  const auto n = table.features.rows();
+  table.features.conservativeResize(n + more.features.rows(), Eigen::NoChange);
+  table.features.bottomRows(more.features.rows()) = more.features;
+  table.target.conservativeResize(n + more.target.size());
+  table.target.tail(more.target.size()) = more.target;
+  table.time.insert(table.time.end(), more.time.begin(), more.time.end());
+  table.temperature.insert(table.temperature.end(), more.temperature.begin(), more.temperature.end());
+  table.row.insert(table.row.end(), more.row.begin(), more.row.end());
+}
+
+}  // namespace thermodrift

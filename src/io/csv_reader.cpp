@@ -1,0 +1,224 @@
+#include "thermodrift/io/csv_reader.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+
+namespace {
+
+constexpr std::size_t kDialectRows = 20;  // data rows looked at to learn the column count
+
+std::string_view trim(std::string_view text) {
+  const auto first = text.find_first_not_of(" \t");
+  if (first == std::string_view::npos) return {};
+  const auto last = text.find_last_not_of(" \t");
+  text = text.substr(first, last - first + 1);
+  if (text.size() >= 2 && text.front() == '"' && text.back() == '"') {
+    text = text.substr(1, text.size() - 2);
+  }
+  return text;
+}
+
+bool is_blank(std::string_view line) { return trim(line).empty(); }
+
+// Comment and banner lines: '#' and '%' comments, '//' comments, and the '=~=~=' banner
+// that PuTTY writes at the top of every log it saves.
+bool is_comment(std::string_view line) {
+  const auto text = trim(line);
+  return text.starts_with('#') || text.starts_with('%') || text.starts_with("//") ||
+         text.starts_with('=');
+}
+
+bool is_number(std::string_view cell) {
+  double value = 0;
+  const auto* end = cell.data() + cell.size();
+  const auto result = std::from_chars(cell.data(), end, value);
+  return !cell.empty() && result.ec == std::errc{} && result.ptr == end;
+}
+
+// The delimiter is the most frequent of comma, semicolon and tab on the first line that
+// has any of them; 0 when it has none.
+char guess_delimiter(std::string_view line) {
+  char best = 0;
+  std::ptrdiff_t best_count = 0;
+  for (char candidate : {',', ';', '\t'}) {
+    const auto count = std::count(line.begin(), line.end(), candidate);
+    if (count > best_count) {
+      best = candidate;
+      best_count = count;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+double parse_cell(std::string_view cell, const std::string& file, std::size_t line,
+                  std::size_t column) {
+  if (cell.empty()) throw DataError(file, line, column, "empty cell, expected a number");
+  double value = 0;
+  const char* begin = cell.data();
+  if (cell.front() == '+') ++begin;  // from_chars does not take a leading '+'
+  const auto* end = cell.data() + cell.size();
+  const auto result = std::from_chars(begin, end, value);
+  if (result.ec == std::errc::result_out_of_range) {
+    throw DataError(file, line, column, fmt::format("'{}' is out of the range of a double", cell));
+  }
+  if (result.ec != std::errc{} || result.ptr != end) {
+    throw DataError(file, line, column, fmt::format("'{}' is not a number", cell));
+  }
+  if (!std::isfinite(value)) {
+    throw DataError(file, line, column, fmt::format("'{}' is not a finite number", cell));
+  }
+  return value;
+}
+
+CsvReader::CsvReader(std::string path) : path_(std::move(path)), stream_(path_, std::ios::binary) {
+  if (!stream_) throw DataError(path_, 0, 0, "cannot open the file for reading");
+  learn_dialect();
+}
+
+bool CsvReader::read_line(std::string& line) {
+  if (!std::getline(stream_, line)) {
+    if (stream_.bad()) throw DataError(path_, line_number_ + 1, 0, "read error");
+    return false;
+  }
+  ++line_number_;
+  if (line_number_ == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  return true;
+}
+
+CsvRow CsvReader::split(std::string line, std::size_t line_number) const {
+  CsvRow row;
+  row.line = line_number;
+  row.text = std::move(line);
+  const std::string_view text = row.text;
+  std::size_t start = 0;
+  while (true) {
+    const auto cut = text.find(delimiter_, start);
+    const auto cell = trim(text.substr(start, cut == std::string_view::npos ? cut : cut - start));
+    row.spans.emplace_back(cell.empty() ? start : static_cast<std::size_t>(cell.data() - text.data()),
+                           cell.size());
+    if (cut == std::string_view::npos) break;
+    start = cut + 1;
+  }
+  return row;
+}
+
+void CsvReader::learn_dialect() {
+  std::string line;
+  bool delimiter_known = false;
+  while (lookahead_.size() < kDialectRows && read_line(line)) {
+    if (is_blank(line)) continue;
+    if (is_comment(line)) {
+      ++skipped_comments_;
+      continue;
+    }
+    if (!delimiter_known) {
+      const char guess = guess_delimiter(line);
+      if (guess == 0) {  // a banner line before the data: no delimiter at all
+        ++skipped_comments_;
+        continue;
+      }
+      delimiter_ = guess;
+      delimiter_known = true;
+    }
+    auto row = split(line, line_number_);
+    bool any_number = false;
+    for (std::size_t i = 0; i < row.size(); ++i) any_number = any_number || is_number(row.cell(i));
+    if (!any_number && lookahead_.empty() && header_.empty()) {
+      for (std::size_t i = 0; i < row.size(); ++i) header_.emplace_back(row.cell(i));
+      header_line_ = row.line;
+      continue;
+    }
+    lookahead_.push_back(std::move(row));
+  }
+
+  if (!header_.empty()) {
+    column_count_ = header_.size();
+  } else {
+    for (const auto& row : lookahead_) column_count_ = std::max(column_count_, row.size());
+  }
+  if (lookahead_.empty()) {
+    throw DataError(path_, line_number_ == 0 ? 0 : line_number_, 0,
+                    header_.empty() ? "no data rows in the file" : "only a header, no data rows");
+  }
+  std::reverse(lookahead_.begin(), lookahead_.end());  // pop from the back in file order
+}
+
+std::optional<CsvRow> CsvReader::next() {
+  while (true) {
+    std::optional<CsvRow> row;
+    if (!lookahead_.empty()) {
+      row = std::move(lookahead_.back());
+      lookahead_.pop_back();
+    } else {
+      std::string line;
+      do {
+        if (!read_line(line)) return std::nullopt;
+        if (is_comment(line)) {
+          ++skipped_comments_;
+          line.clear();
+        }
+      } while (is_blank(line));
+      row = split(std::move(line), line_number_);
+    }
+    const std::size_t count = row->size();
+    if (count == column_count_) {
+      ++rows_returned_;
+      return row;
+    }
+    if (count < column_count_) {
+      // A terminal that started logging mid-line cuts the first row short, one that
+      // stopped mid-line cuts the last: those rows are dropped, not fatal.
+      const bool first_row = rows_returned_ == 0 && dropped_rows_.empty();
+      bool last_row = false;
+      if (!first_row && lookahead_.empty()) {
+        const auto here = stream_.tellg();
+        const auto line_here = line_number_;
+        std::string peek;
+        bool more = false;
+        while (read_line(peek)) {
+          if (!is_blank(peek) && !is_comment(peek)) {
+            more = true;
+            break;
+          }
+        }
+        last_row = !more;
+        stream_.clear();
+        stream_.seekg(here);
+        line_number_ = line_here;
+      }
+      if (first_row || last_row) {
+        dropped_rows_.push_back(fmt::format("line {}: {} row cut short ({} of {} fields), dropped",
+                                            row->line, first_row ? "first" : "last", count,
+                                            column_count_));
+        continue;
+      }
+      throw DataError(path_, row->line, count + 1,
+                      fmt::format("row has {} fields, expected {}", count, column_count_));
+    }
+    // Column of the first extra field: one past the expected count.
+    throw DataError(path_, row->line, column_count_ + 1,
+                    fmt::format("row has {} fields, expected {}", count, column_count_));
+  }
+}
+
+std::vector<std::string> CsvReader::warnings() const {
+  std::vector<std::string> out;
+  if (skipped_comments_ > 0) {
+    out.push_back(fmt::format("{}: skipped {} banner/comment line{}", path_, skipped_comments_,
+                              skipped_comments_ == 1 ? "" : "s"));
+  }
+  for (const auto& dropped : dropped_rows_) out.push_back(fmt::format("{}: {}", path_, dropped));
+  return out;
+}
+
+}  // namespace thermodrift
