@@ -1,0 +1,54 @@
+// The model file: one JSON document per fit, holding for every gyro axis the columns it
+// reads, the feature pipeline, and the fitted model. Versioned; loading checks
+// everything and rejects a file that does not fit with a one-line DataError.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <span>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "thermodrift/features/pipeline.hpp"
+#include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/models/linear.hpp"
+#include "thermodrift/models/svr_model.hpp"
+
+namespace thermodrift {
+
+struct AxisModel {
+  std::string name;                // axis label, the gyro column's header name or "column N"
+  std::string gyro_column;         // as named to the reader: header name or 1-based index
+  std::string temperature_column;  // likewise
+  Pipeline pipeline;
+  std::string kind;                // "linear", "stepwise" or "svr"
+  std::variant<LinearModel, SvrModel> model;
+  nlohmann::json fit;              // how it was fitted: parameters, metrics, timings (informational)
+
+  // Predicted drift (°/h) for one sample's features (one per pipeline term).
+  double predict(std::span<const double> features) const;
+  Eigen::VectorXd predict(const Eigen::MatrixXd& features) const;
+};
+
+struct DriftModel {
+  static constexpr int kFormatVersion = 1;
+  GyroUnit gyro_unit = GyroUnit::dph;     // unit of the gyro columns the model reads
+  std::optional<std::string> time_column;  // as in the training log's LogSpec
+  std::optional<double> rate_hz;
+  std::vector<AxisModel> axes;
+
+  // The LogSpec that reads a log the way the training log was read.
+  LogSpec log_spec() const;
+};
+
+nlohmann::json to_json(const DriftModel& model);
+// Throws DataError(source, ...) on anything that does not fit.
+DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& source);
+
+void save_drift_model(const DriftModel& model, const std::string& path,
+                      const std::vector<std::string>& inputs = {});
+DriftModel load_drift_model(const std::string& path);
+
+}  // namespace thermodrift

@@ -1,0 +1,48 @@
+// An ε-SVR drift model as stored in the model file: the RBF decision function, trained
+// on standardized features and target, plus the standardization that maps a sample's
+// features in and the prediction out. Users never choose a scale by hand.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "thermodrift/models/svr.hpp"
+
+namespace thermodrift {
+
+// Affine map of each feature to zero mean and unit standard deviation (constant
+// features keep scale 1 rather than dividing by zero).
+struct Standardization {
+  Eigen::VectorXd feature_mean;
+  Eigen::VectorXd feature_scale;
+  double target_mean = 0;
+  double target_scale = 1;
+
+  static Standardization of(const Eigen::MatrixXd& features, const Eigen::VectorXd& target);
+  static Standardization identity(Eigen::Index feature_count);
+  Eigen::MatrixXd features(const Eigen::MatrixXd& raw) const;
+  Eigen::VectorXd target(const Eigen::VectorXd& raw) const;
+};
+
+struct SvrModel {
+  Standardization scaling;
+  RbfDecisionFunction function;  // in standardized units
+  double C = 0;                  // hyper-parameters it was trained with (informational)
+  double epsilon = 0;            // in standardized target units
+  bool converged = true;
+
+  double sigma() const;  // RBF width in standardized feature units: gamma = 1/(2 sigma²)
+  double predict(std::span<const double> features) const;
+  Eigen::VectorXd predict(const Eigen::MatrixXd& features) const;  // one row per sample
+
+  nlohmann::json to_json(const std::vector<std::string>& term_names) const;
+  // Throws Error when sizes disagree with `term_names` or a number is not finite.
+  static SvrModel from_json(const nlohmann::json& json, const std::vector<std::string>& term_names);
+};
+
+}  // namespace thermodrift

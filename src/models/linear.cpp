@@ -1,0 +1,242 @@
+#include "thermodrift/models/linear.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+
+double Regressor::evaluate(std::span<const double> features) const {
+  double value = 1.0;
+  for (std::size_t i = 0; i < powers.size(); ++i) {
+    for (int p = 0; p < powers[i]; ++p) value *= features[i];
+  }
+  return value;
+}
+
+std::string Regressor::name(const std::vector<std::string>& term_names) const {
+  std::string text;
+  for (std::size_t i = 0; i < powers.size(); ++i) {
+    if (powers[i] == 0) continue;
+    if (!text.empty()) text += '*';
+    text += term_names.at(i);
+    if (powers[i] > 1) text += fmt::format("^{}", powers[i]);
+  }
+  return text;
+}
+
+Regressor Regressor::parse(const std::string& text, const std::vector<std::string>& term_names) {
+  Regressor regressor{std::vector<int>(term_names.size(), 0)};
+  std::stringstream factors(text);
+  std::string factor;
+  while (std::getline(factors, factor, '*')) {
+    int power = 1;
+    if (const auto caret = factor.find('^'); caret != std::string::npos) {
+      try {
+        power = std::stoi(factor.substr(caret + 1));
+      } catch (const std::exception&) {
+        throw UsageError(fmt::format("bad power in regressor '{}'", text));
+      }
+      if (power < 1 || power > 9) throw UsageError(fmt::format("bad power in regressor '{}'", text));
+      factor.resize(caret);
+    }
+    bool known = false;
+    for (std::size_t i = 0; i < term_names.size(); ++i) {
+      if (term_names[i] == factor) {
+        regressor.powers[i] += power;
+        known = true;
+      }
+    }
+    if (!known) throw UsageError(fmt::format("regressor '{}' names unknown term '{}'", text, factor));
+  }
+  return regressor;
+}
+
+std::vector<Regressor> linear_regressors(std::size_t term_count) {
+  std::vector<Regressor> regressors;
+  for (std::size_t i = 0; i < term_count; ++i) {
+    Regressor r{std::vector<int>(term_count, 0)};
+    r.powers[i] = 1;
+    regressors.push_back(r);
+  }
+  return regressors;
+}
+
+std::vector<Regressor> quadratic_regressors(std::size_t term_count) {
+  auto regressors = linear_regressors(term_count);
+  for (std::size_t i = 0; i < term_count; ++i) {
+    for (std::size_t j = i; j < term_count; ++j) {
+      Regressor r{std::vector<int>(term_count, 0)};
+      r.powers[i] += 1;
+      r.powers[j] += 1;
+      regressors.push_back(r);
+    }
+  }
+  return regressors;
+}
+
+double LinearModel::predict(std::span<const double> features) const {
+  double value = intercept;
+  for (std::size_t k = 0; k < regressors.size(); ++k) {
+    value += coefficients(static_cast<Eigen::Index>(k)) * regressors[k].evaluate(features);
+  }
+  return value;
+}
+
+Eigen::VectorXd LinearModel::predict(const Eigen::MatrixXd& features) const {
+  Eigen::VectorXd out(features.rows());
+  std::vector<double> row(static_cast<std::size_t>(features.cols()));
+  for (Eigen::Index i = 0; i < features.rows(); ++i) {
+    for (Eigen::Index j = 0; j < features.cols(); ++j) row[static_cast<std::size_t>(j)] = features(i, j);
+    out(i) = predict(row);
+  }
+  return out;
+}
+
+nlohmann::json LinearModel::to_json(const std::vector<std::string>& term_names) const {
+  nlohmann::json regressor_names = nlohmann::json::array();
+  for (const auto& r : regressors) regressor_names.push_back(r.name(term_names));
+  return {{"intercept", intercept},
+          {"regressors", regressor_names},
+          {"coefficients", std::vector<double>(coefficients.data(), coefficients.data() + coefficients.size())},
+          {"rank_deficiency", rank_deficiency}};
+}
+
+LinearModel LinearModel::from_json(const nlohmann::json& json,
+                                   const std::vector<std::string>& term_names) {
+  LinearModel model;
+  model.intercept = json.at("intercept").get<double>();
+  for (const auto& name : json.at("regressors")) {
+    model.regressors.push_back(Regressor::parse(name.get<std::string>(), term_names));
+  }
+  const auto coefficients = json.at("coefficients").get<std::vector<double>>();
+  if (coefficients.size() != model.regressors.size()) {
+    throw Error(fmt::format("{} coefficients for {} regressors", coefficients.size(),
+                            model.regressors.size()));
+  }
+  model.coefficients = Eigen::Map<const Eigen::VectorXd>(coefficients.data(),
+                                                         static_cast<Eigen::Index>(coefficients.size()));
+  model.rank_deficiency = json.value("rank_deficiency", std::size_t{0});
+  return model;
+}
+
+namespace {
+
+Eigen::MatrixXd design_matrix(const Eigen::MatrixXd& features, const std::vector<Regressor>& regressors) {
+  Eigen::MatrixXd design(features.rows(), static_cast<Eigen::Index>(regressors.size()) + 1);
+  std::vector<double> row(static_cast<std::size_t>(features.cols()));
+  for (Eigen::Index i = 0; i < features.rows(); ++i) {
+    for (Eigen::Index j = 0; j < features.cols(); ++j) row[static_cast<std::size_t>(j)] = features(i, j);
+    design(i, 0) = 1.0;
+    for (std::size_t k = 0; k < regressors.size(); ++k) {
+      design(i, static_cast<Eigen::Index>(k) + 1) = regressors[k].evaluate(row);
+    }
+  }
+  return design;
+}
+
+}  // namespace
+
+LinearModel fit_least_squares(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
+                              std::vector<Regressor> regressors) {
+  const auto parameters = static_cast<Eigen::Index>(regressors.size()) + 1;
+  if (features.rows() < parameters) {
+    throw UsageError(fmt::format("{} samples cannot fit {} parameters", features.rows(), parameters));
+  }
+  const Eigen::MatrixXd design = design_matrix(features, regressors);
+  // Column scaling makes the rank decision independent of the terms' units.
+  const Eigen::VectorXd scale = design.colwise().norm().transpose().cwiseMax(1e-300);
+  const Eigen::MatrixXd scaled = design * scale.cwiseInverse().asDiagonal();
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(scaled);
+  qr.setThreshold(1e-10);
+  const Eigen::VectorXd solution = qr.solve(target).cwiseQuotient(scale);
+
+  LinearModel model;
+  model.regressors = std::move(regressors);
+  model.intercept = solution(0);
+  model.coefficients = solution.tail(parameters - 1);
+  model.rank_deficiency = static_cast<std::size_t>(parameters - qr.rank());
+  return model;
+}
+
+namespace {
+
+double residual_sum_of_squares(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
+                               const std::vector<Regressor>& regressors) {
+  const LinearModel model = fit_least_squares(features, target, regressors);
+  return (target - model.predict(features)).squaredNorm();
+}
+
+}  // namespace
+
+StepwiseFit fit_stepwise(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
+                         const std::vector<Regressor>& candidates,
+                         const std::vector<std::string>& term_names,
+                         const StepwiseOptions& options) {
+  if (!(options.f_to_remove < options.f_to_enter)) {
+    throw UsageError("stepwise: F-to-remove must be below F-to-enter, or terms can cycle");
+  }
+  const auto n = static_cast<double>(features.rows());
+  std::vector<bool> included(candidates.size(), false);
+  auto chosen = [&](std::ptrdiff_t toggle) {
+    std::vector<Regressor> out;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      const bool in = included[k] != (static_cast<std::ptrdiff_t>(k) == toggle);
+      if (in) out.push_back(candidates[k]);
+    }
+    return out;
+  };
+
+  StepwiseFit fit;
+  for (std::size_t step = 0; step < options.max_steps; ++step) {
+    const auto current = chosen(-1);
+    const double rss = residual_sum_of_squares(features, target, current);
+    const double p = static_cast<double>(current.size());
+
+    // Forward: the candidate with the largest partial F = (RSS - RSS+) / (RSS+ / (n - p - 2)).
+    double best_f = 0;
+    std::ptrdiff_t best = -1;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      if (included[k] || n - p - 2 <= 0) continue;
+      const double rss_plus = residual_sum_of_squares(features, target, chosen(static_cast<std::ptrdiff_t>(k)));
+      const double f = rss_plus > 0 ? (rss - rss_plus) / (rss_plus / (n - p - 2)) : INFINITY;
+      if (f > best_f) {
+        best_f = f;
+        best = static_cast<std::ptrdiff_t>(k);
+      }
+    }
+    if (best >= 0 && best_f > options.f_to_enter) {
+      included[static_cast<std::size_t>(best)] = true;
+      fit.path.push_back({"add", candidates[static_cast<std::size_t>(best)].name(term_names), best_f});
+    } else {
+      break;
+    }
+
+    // Backward: drop the included regressor with the smallest partial F if below threshold.
+    const auto now = chosen(-1);
+    const double rss_now = residual_sum_of_squares(features, target, now);
+    const double p_now = static_cast<double>(now.size());
+    double worst_f = INFINITY;
+    std::ptrdiff_t worst = -1;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      if (!included[k]) continue;
+      const double rss_minus = residual_sum_of_squares(features, target, chosen(static_cast<std::ptrdiff_t>(k)));
+      const double f = rss_now > 0 ? (rss_minus - rss_now) / (rss_now / (n - p_now - 1)) : INFINITY;
+      if (f < worst_f) {
+        worst_f = f;
+        worst = static_cast<std::ptrdiff_t>(k);
+      }
+    }
+    if (worst >= 0 && worst_f < options.f_to_remove) {
+      included[static_cast<std::size_t>(worst)] = false;
+      fit.path.push_back({"remove", candidates[static_cast<std::size_t>(worst)].name(term_names), worst_f});
+    }
+  }
+  fit.model = fit_least_squares(features, target, chosen(-1));
+  return fit;
+}
+
+}  // namespace thermodrift

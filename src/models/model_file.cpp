@@ -1,0 +1,146 @@
+#include "thermodrift/models/model_file.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "thermodrift/error.hpp"
+#include "thermodrift/io/atomic_file.hpp"
+
+namespace thermodrift {
+
+namespace {
+constexpr const char* kFormatName = "thermodrift-model";
+}
+
+double AxisModel::predict(std::span<const double> features) const {
+  return std::visit([&](const auto& m) { return m.predict(features); }, model);
+}
+
+Eigen::VectorXd AxisModel::predict(const Eigen::MatrixXd& features) const {
+  return std::visit([&](const auto& m) { return Eigen::VectorXd(m.predict(features)); }, model);
+}
+
+LogSpec DriftModel::log_spec() const {
+  LogSpec spec;
+  spec.time_column = time_column;
+  spec.rate_hz = rate_hz;
+  spec.gyro_unit = gyro_unit;
+  for (const auto& axis : axes) {
+    spec.gyro_columns.push_back(axis.gyro_column);
+    spec.temperature_columns.push_back(axis.temperature_column);
+  }
+  return spec;
+}
+
+nlohmann::json to_json(const DriftModel& model) {
+  nlohmann::json axes = nlohmann::json::array();
+  for (const auto& axis : model.axes) {
+    const auto terms = axis.pipeline.term_names();
+    nlohmann::json body = std::visit([&](const auto& m) { return m.to_json(terms); }, axis.model);
+    axes.push_back({{"name", axis.name},
+                    {"gyro_column", axis.gyro_column},
+                    {"temperature_column", axis.temperature_column},
+                    {"pipeline", axis.pipeline.to_json()},
+                    {"kind", axis.kind},
+                    {"model", body},
+                    {"fit", axis.fit}});
+  }
+  nlohmann::json json = {{"format", kFormatName},
+                         {"version", DriftModel::kFormatVersion},
+                         {"gyro_unit", std::string(to_string(model.gyro_unit))},
+                         {"axes", axes}};
+  if (model.time_column) json["time_column"] = *model.time_column;
+  if (model.rate_hz) json["rate_hz"] = *model.rate_hz;
+  return json;
+}
+
+DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& source) {
+  auto fail = [&](const std::string& what) { return DataError(source, 0, 0, what); };
+  try {
+    if (!json.is_object() || json.value("format", "") != kFormatName) {
+      throw fail("not a thermodrift model file (no \"format\": \"thermodrift-model\")");
+    }
+    const int version = json.at("version").get<int>();
+    if (version != DriftModel::kFormatVersion) {
+      throw fail(fmt::format("model file version {} is not supported (this build reads version {})",
+                             version, DriftModel::kFormatVersion));
+    }
+    DriftModel model;
+    model.gyro_unit = parse_gyro_unit(json.at("gyro_unit").get<std::string>());
+    if (json.contains("time_column")) model.time_column = json.at("time_column").get<std::string>();
+    if (json.contains("rate_hz")) model.rate_hz = json.at("rate_hz").get<double>();
+    if (!json.at("axes").is_array() || json.at("axes").empty()) throw fail("model file has no axes");
+    std::size_t index = 0;
+    for (const auto& entry : json.at("axes")) {
+      try {
+        AxisModel axis;
+        axis.name = entry.at("name").get<std::string>();
+        axis.gyro_column = entry.at("gyro_column").get<std::string>();
+        axis.temperature_column = entry.at("temperature_column").get<std::string>();
+        axis.pipeline = Pipeline::from_json(entry.at("pipeline"));
+        axis.kind = entry.at("kind").get<std::string>();
+        const auto terms = axis.pipeline.term_names();
+        if (axis.kind == "linear" || axis.kind == "stepwise") {
+          auto linear = LinearModel::from_json(entry.at("model"), terms);
+          if (!std::isfinite(linear.intercept) || !linear.coefficients.allFinite()) {
+            throw Error("non-finite coefficient");
+          }
+          axis.model = std::move(linear);
+        } else if (axis.kind == "svr") {
+          axis.model = SvrModel::from_json(entry.at("model"), terms);
+        } else {
+          throw Error(fmt::format("unknown model kind '{}'", axis.kind));
+        }
+        axis.fit = entry.value("fit", nlohmann::json::object());
+        model.axes.push_back(std::move(axis));
+      } catch (const DataError&) {
+        throw;
+      } catch (const std::exception& e) {
+        throw fail(fmt::format("axis {}: {}", index + 1, e.what()));
+      }
+      ++index;
+    }
+    return model;
+  } catch (const DataError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw fail(fmt::format("invalid model file: {}", e.what()));
+  }
+}
+
+void save_drift_model(const DriftModel& model, const std::string& path,
+                      const std::vector<std::string>& inputs) {
+  write_file_atomically(path, to_json(model).dump(1) + "\n", inputs);
+}
+
+DriftModel load_drift_model(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw DataError(path, 0, 0, "cannot open the model file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  nlohmann::json json;
+  try {
+    json = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // Turn the byte offset into line and column for the one-line error.
+    std::size_t line = 1, column = 1;
+    for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        column = 1;
+      } else {
+        ++column;
+      }
+    }
+    const bool truncated = e.byte >= text.size();
+    throw DataError(path, line, column,
+                    truncated ? "model file ends early (truncated?)" : "model file is not valid JSON");
+  }
+  return drift_model_from_json(json, path);
+}
+
+}  // namespace thermodrift
