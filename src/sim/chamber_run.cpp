@@ -1,0 +1,111 @@
+#include "thermodrift/sim/chamber_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <ostream>
+
+#include <fmt/format.h>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift::sim {
+namespace {
+
+// Samples in a window of `window_s` seconds, at least one.
+std::size_t window_samples(double window_s, double rate_hz) {
+  if (!std::isfinite(window_s) || window_s < 0.0) {
+    throw UsageError(fmt::format("smoothing window must be a non-negative number of seconds, got {}", window_s));
+  }
+  return std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(window_s * rate_hz)));
+}
+
+}  // namespace
+
+const std::vector<double>& ChamberRun::column(std::string_view name) const {
+  const auto found = std::find(column_names.begin(), column_names.end(), name);
+  if (found == column_names.end()) throw UsageError(fmt::format("chamber run has no column '{}'", name));
+  return columns[static_cast<std::size_t>(found - column_names.begin())];
+}
+
+std::vector<std::size_t> ChamberRun::cycle_start_rows() const {
+  std::vector<std::size_t> starts;
+  for (double start_s : cycle_start_s) {
+    starts.push_back(std::min(rows(), static_cast<std::size_t>(std::llround(std::ceil(start_s * rate_hz - 1e-9)))));
+  }
+  return starts;
+}
+
+std::array<double, 3> ChamberRun::noise_floor(double window_s) const {
+  const std::size_t window = window_samples(window_s, rate_hz);
+  static constexpr std::array<std::string_view, 3> gyro_names = {"gyro_x", "gyro_y", "gyro_z"};
+  static constexpr std::array<std::string_view, 3> drift_names = {"drift_x", "drift_y", "drift_z"};
+  std::array<double, 3> floor{};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const std::vector<double>& gyro = column(gyro_names[axis]);
+    const std::vector<double>& drift = column(drift_names[axis]);
+    if (gyro.size() < window) throw UsageError("smoothing window is longer than the run");
+    // Trailing mean over the last `window` noise samples, kept as a running sum.
+    std::vector<double> smoothed;
+    smoothed.reserve(gyro.size() - window + 1);
+    double sum = 0.0;
+    for (std::size_t k = 0; k < gyro.size(); ++k) {
+      sum += gyro[k] - drift[k];
+      if (k >= window) sum -= gyro[k - window] - drift[k - window];
+      if (k + 1 >= window) smoothed.push_back(sum / static_cast<double>(window));
+    }
+    double mean = 0.0;
+    for (double value : smoothed) mean += value;
+    mean /= static_cast<double>(smoothed.size());
+    double variance = 0.0;
+    for (double value : smoothed) variance += (value - mean) * (value - mean);
+    floor[axis] = variance / static_cast<double>(smoothed.size());
+  }
+  return floor;
+}
+
+double expected_noise_floor(const NoiseOptions& noise, double rate_hz, double window_s) {
+  const std::size_t window = window_samples(window_s, rate_hz);
+  const double w = static_cast<double>(window);
+  const double dt_s = 1.0 / rate_hz;
+  const double white_std = noise.angle_random_walk_deg_per_sqrt_h * 60.0 / std::sqrt(dt_s);
+  const double white = white_std * white_std / w;
+  // Mean of w samples of an AR(1) process with coefficient φ and variance σ²:
+  //   σ²/w² · (w + 2·Σ_{j=1}^{w-1} (w - j)·φ^j).
+  const double bias_std = noise.bias_instability_dph * 0.6643 / 0.6198;
+  const double phi = std::exp(-dt_s / noise.bias_correlation_time_s);
+  double correlation_sum = w;
+  double phi_j = 1.0;
+  for (std::size_t j = 1; j < window; ++j) {
+    phi_j *= phi;
+    correlation_sum += 2.0 * (w - static_cast<double>(j)) * phi_j;
+  }
+  const double bias = bias_std * bias_std * correlation_sum / (w * w);
+  // The carried remainder r is uniform on ±q/2: the window's mean rate error is
+  // (r_k - r_{k-w}) / (w·dt), of variance 2·(q²/12) / (w·dt)².
+  const double q = noise.quantization_arcsec;
+  const double quantization = 2.0 * q * q / 12.0 / ((w * dt_s) * (w * dt_s));
+  return white + bias + quantization;
+}
+
+void write_csv(const ChamberRun& run, std::ostream& out) {
+  fmt::memory_buffer line;
+  for (std::size_t c = 0; c < run.column_names.size(); ++c) {
+    fmt::format_to(std::back_inserter(line), "{}{}", c == 0 ? "" : ",", run.column_names[c]);
+  }
+  line.push_back('\n');
+  out.write(line.data(), static_cast<std::streamsize>(line.size()));
+  for (std::size_t k = 0; k < run.rows(); ++k) {
+    line.clear();
+    for (std::size_t c = 0; c < run.columns.size(); ++c) {
+      if (c == 0) {
+        fmt::format_to(std::back_inserter(line), "{}", run.columns[c][k]);
+      } else {
+        fmt::format_to(std::back_inserter(line), ",{:.9g}", run.columns[c][k]);
+      }
+    }
+    line.push_back('\n');
+    out.write(line.data(), static_cast<std::streamsize>(line.size()));
+  }
+}
+
+}  // namespace thermodrift::sim
