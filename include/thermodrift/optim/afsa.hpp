@@ -24,9 +24,9 @@ class Afsa {
   // visual_range = 0.1 is a tenth of every side whatever the units.
   struct Options {
     int fish = 20;                          // n, swarm size
-    int iterations = 40;                    // T, iterations after the initial scatter
-    double visual_range = 0.25;             // r: neighbours and prey probes lie within it
-    double step = 0.15;                     // λ: longest move of one behaviour
+    int iterations = 60;                    // T, iterations after the initial scatter
+    double visual_range = 0.5;              // r: neighbours and prey probes lie within it
+    double step = 0.3;                      // λ: longest move of one behaviour
     double crowding_factor = 0.5;           // δ in (0, 1): crowded when n_i / n >= δ
     int try_limit = 4;                      // m: prey probes before a random move
     Schedule schedule = Schedule::exponential;  // shrink r and λ so the end of the run refines
