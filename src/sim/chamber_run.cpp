@@ -71,7 +71,7 @@ double expected_noise_floor(const NoiseOptions& noise, double rate_hz, double wi
   const double white = white_std * white_std / w;
   // Mean of w samples of an AR(1) process with coefficient φ and variance σ²:
   //   σ²/w² · (w + 2·Σ_{j=1}^{w-1} (w - j)·φ^j).
-  const double bias_std = noise.bias_instability_dph * 0.6643 / 0.6198;
+  const double bias_std = bias_process_std_dph(noise);
   const double phi = std::exp(-dt_s / noise.bias_correlation_time_s);
   double correlation_sum = w;
   double phi_j = 1.0;

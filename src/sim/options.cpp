@@ -39,6 +39,10 @@ std::array<AxisModel, 3> default_axis_models() {
   return {x, y, z};
 }
 
+double bias_process_std_dph(const NoiseOptions& noise) {
+  return noise.bias_instability_dph * 0.6643 / 0.6174;
+}
+
 namespace {
 
 // Records the first failed check; `ok` stays false from then on.

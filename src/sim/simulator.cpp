@@ -102,7 +102,7 @@ class AxisNoise {
   AxisNoise(const NoiseOptions& noise, double dt_s, std::uint64_t seed, int axis)
       : white_std_dph_(noise.angle_random_walk_deg_per_sqrt_h * 60.0 / std::sqrt(dt_s)),
         bias_phi_(std::exp(-dt_s / noise.bias_correlation_time_s)),
-        bias_std_dph_(gauss_markov_std(noise.bias_instability_dph)),
+        bias_std_dph_(bias_process_std_dph(noise)),
         quantum_arcsec_(noise.quantization_arcsec),
         temperature_noise_c_(noise.temperature_noise_c),
         temperature_resolution_c_(noise.temperature_resolution_c),
@@ -111,12 +111,6 @@ class AxisNoise {
         bias_(derive_seed(seed, 3 * axis + 1)),
         thermometer_(derive_seed(seed, 3 * axis + 2)) {
     bias_dph_ = bias_std_dph_ * bias_();  // start from the stationary distribution
-  }
-
-  // σ of a Gauss-Markov process whose Allan-deviation peak, 0.6198·σ at T ≈ 1.89·τ,
-  // equals the flicker floor 0.664·B of bias instability B (IEEE Std 952 Annex C).
-  static double gauss_markov_std(double bias_instability_dph) {
-    return bias_instability_dph * 0.6643 / 0.6198;
   }
 
   // Measured rate (°/h) for this sample.

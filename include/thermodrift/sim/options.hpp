@@ -43,6 +43,11 @@ struct NoiseOptions {
   double temperature_resolution_c = 0.001;  // resolution of the temperature readings (0: off)
 };
 
+// Stationary std (°/h) of the first-order Gauss-Markov bias: its Allan-deviation peak,
+// 0.6174·σ at T ≈ 1.89·τ, equals the flicker floor 0.664·B that defines bias instability B
+// (IEEE Std 952 Annex C), so σ = B·0.6643/0.6174 ≈ 1.076·B.
+double bias_process_std_dph(const NoiseOptions& noise);
+
 struct SimulatorOptions {
   std::uint64_t seed = 1;                 // seeds every noise stream; true drift does not depend on it
   int cycles = 2;                         // number of chamber cycles
