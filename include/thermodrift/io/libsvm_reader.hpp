@@ -1,0 +1,30 @@
+// Reader of libsvm's sparse text format, one sample per line:
+//   label index:value index:value ...
+// with 1-based, strictly increasing indices. Missing indices are zeros; the dense
+// result has as many columns as the largest index in the file.
+#pragma once
+
+#include <iosfwd>
+#include <string>
+
+#include <Eigen/Dense>
+
+namespace thermodrift {
+
+struct LabelledData {
+  Eigen::MatrixXd samples;  // one row per line of the file
+  Eigen::VectorXd targets;  // the labels
+};
+
+// Throws DataError naming line and column (1-based) on a bad label, a bad or
+// non-increasing index, a missing colon, a bad value, or a file without data lines.
+// Blank lines are skipped.
+LabelledData read_libsvm(const std::string& path);
+// The same from a stream; `name` is the file name used in errors.
+LabelledData read_libsvm(std::istream& input, const std::string& name);
+
+// Writes `data` in the same format (every column, full precision), as svm-train reads it.
+void write_libsvm(std::ostream& output, const Eigen::MatrixXd& samples,
+                  const Eigen::VectorXd& targets);
+
+}  // namespace thermodrift

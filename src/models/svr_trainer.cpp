@@ -1,0 +1,180 @@
+// ε-SVR: options, the trainer that runs the solver, and the decision function it returns.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "svr_kernel.hpp"
+#include "svr_solver.hpp"
+#include "thermodrift/error.hpp"
+#include "thermodrift/models/svr.hpp"
+
+namespace thermodrift {
+
+bool SvrOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& reason) {
+    if (error) *error = reason;
+    return false;
+  };
+  if (!(std::isfinite(C) && C > 0)) return fail(fmt::format("C must be a positive number, not {}", C));
+  if (!(std::isfinite(gamma) && gamma > 0))
+    return fail(fmt::format("gamma must be a positive number, not {}", gamma));
+  if (!(std::isfinite(epsilon) && epsilon >= 0))
+    return fail(fmt::format("epsilon must be a number >= 0, not {}", epsilon));
+  if (!(std::isfinite(tolerance) && tolerance > 0))
+    return fail(fmt::format("tolerance must be a positive number, not {}", tolerance));
+  if (!(std::isfinite(cache_mb) && cache_mb > 0))
+    return fail(fmt::format("cache_mb must be a positive number, not {}", cache_mb));
+  if (max_iterations < 1) return fail(fmt::format("max_iterations must be >= 1, not {}", max_iterations));
+  if (threads < 1 || threads > 256) return fail(fmt::format("threads must be in 1..256, not {}", threads));
+  return true;
+}
+
+const char* to_string(SvrTermination termination) {
+  switch (termination) {
+    case SvrTermination::converged: return "converged";
+    case SvrTermination::iteration_limit: return "iteration_limit";
+  }
+  return "unknown";
+}
+
+double RbfDecisionFunction::operator()(const double* x) const {
+  const Eigen::Index count = support_vectors.rows();
+  const Eigen::Index features = support_vectors.cols();
+  double sum = bias;
+  for (Eigen::Index k = 0; k < count; ++k) {
+    double squared = 0;
+    for (Eigen::Index feature = 0; feature < features; ++feature) {
+      const double difference = support_vectors(k, feature) - x[feature];
+      squared += difference * difference;
+    }
+    sum += coefficients(k) * std::exp(-gamma * squared);
+  }
+  return sum;
+}
+
+Eigen::VectorXd RbfDecisionFunction::predict(const Eigen::MatrixXd& samples) const {
+  if (samples.cols() != support_vectors.cols() && support_vectors.rows() > 0) {
+    throw UsageError(fmt::format("predict: samples have {} features, the model {}", samples.cols(),
+                                 support_vectors.cols()));
+  }
+  Eigen::VectorXd result(samples.rows());
+  Eigen::VectorXd row(samples.cols());
+  for (Eigen::Index r = 0; r < samples.rows(); ++r) {
+    row = samples.row(r).transpose();
+    result(r) = (*this)(row.data());
+  }
+  return result;
+}
+
+std::string SvrSummary::BriefReport() const {
+  return fmt::format("ε-SVR {}: {} iterations, dual objective {:.9g}, max KKT violation {:.3g}, {} SV ({} at C), "
+                     "{} kernel columns{}, {:.3f} s",
+                     to_string(termination), iterations, dual_objective, max_violation, support_vectors,
+                     bounded_support_vectors, kernel_columns, warm_started ? ", warm start" : "", seconds);
+}
+
+SvrDataset::SvrDataset(Eigen::MatrixXd samples, double distance_budget_mb) : samples_(std::move(samples)) {
+  const double n = static_cast<double>(samples_.rows());
+  if (distance_budget_mb > 0 && n * n * sizeof(double) <= distance_budget_mb * 1024.0 * 1024.0) {
+    const Eigen::Index size = samples_.rows();
+    distances_.resize(size, size);
+    for (Eigen::Index column = 0; column < size; ++column) {
+      distances_(column, column) = 0;
+      for (Eigen::Index row = column + 1; row < size; ++row) {
+        const double squared = (samples_.row(row) - samples_.row(column)).squaredNorm();
+        distances_(row, column) = squared;
+        distances_(column, row) = squared;
+      }
+    }
+  }
+}
+
+SvrTrainer::SvrTrainer(SvrOptions options) : options_(options) {
+  std::string error;
+  if (!options_.IsValid(&error)) throw UsageError("SVR options: " + error);
+}
+
+SvrFit SvrTrainer::train(const Eigen::MatrixXd& samples, const Eigen::VectorXd& targets) const {
+  return train(SvrDataset(samples), targets);
+}
+
+SvrFit SvrTrainer::train(const SvrDataset& data, const Eigen::VectorXd& targets,
+                         const SvrFit* warm_start) const {
+  const auto start = std::chrono::steady_clock::now();
+  const Eigen::Index size = targets.size();
+  if (size == 0) throw UsageError("SVR: no training samples");
+  if (static_cast<Eigen::Index>(data.size()) != size) {
+    throw UsageError(fmt::format("SVR: {} samples but {} targets", data.size(), size));
+  }
+  if (!data.samples().allFinite() || !targets.allFinite()) {
+    throw UsageError("SVR: samples and targets must be finite numbers");
+  }
+  if (size > 1'000'000'000) throw UsageError("SVR: too many samples");
+
+  svr_detail::WorkerPool pool(options_.threads);
+  svr_detail::RbfKernel kernel(data, options_.gamma, pool);
+  svr_detail::KernelCache cache(kernel, options_.cache_mb);
+  svr_detail::SmoSettings settings;
+  settings.C = options_.C;
+  settings.epsilon = options_.epsilon;
+  settings.tolerance = options_.tolerance;
+  settings.shrinking = options_.shrinking;
+  settings.max_iterations = options_.max_iterations;
+
+  svr_detail::SmoSolution solution;
+  bool warm = false;
+  if (warm_start && warm_start->alpha.size() > 0) {
+    if (warm_start->alpha.size() != size || warm_start->alpha_star.size() != size || !(warm_start->C > 0)) {
+      throw UsageError(fmt::format("SVR warm start comes from {} samples, this fit has {}",
+                                   warm_start->alpha.size(), size));
+    }
+    // Scaling by C/C_old keeps Σ(α - α*) = 0 and puts every α in [0, C].
+    const double scale = std::min(1.0, options_.C / warm_start->C);
+    const Eigen::VectorXd alpha = (warm_start->alpha * scale).cwiseMax(0.0).cwiseMin(options_.C);
+    const Eigen::VectorXd alpha_star = (warm_start->alpha_star * scale).cwiseMax(0.0).cwiseMin(options_.C);
+    solution = svr_detail::solve_svr_dual(targets, settings, kernel, cache, pool, &alpha, &alpha_star);
+    warm = true;
+  } else {
+    solution = svr_detail::solve_svr_dual(targets, settings, kernel, cache, pool);
+  }
+
+  SvrFit fit;
+  const Eigen::VectorXd beta = solution.alpha - solution.alpha_star;
+  std::size_t support = 0, bounded = 0;
+  for (Eigen::Index i = 0; i < size; ++i) {
+    if (beta(i) != 0) {
+      ++support;
+      if (std::abs(beta(i)) >= options_.C) ++bounded;
+    }
+  }
+  fit.function.gamma = options_.gamma;
+  fit.function.bias = -solution.rho;
+  fit.function.support_vectors.resize(static_cast<Eigen::Index>(support), data.samples().cols());
+  fit.function.coefficients.resize(static_cast<Eigen::Index>(support));
+  Eigen::Index next = 0;
+  for (Eigen::Index i = 0; i < size; ++i) {
+    if (beta(i) == 0) continue;
+    fit.function.support_vectors.row(next) = data.samples().row(i);
+    fit.function.coefficients(next) = beta(i);
+    ++next;
+  }
+  fit.summary.termination =
+      solution.converged ? SvrTermination::converged : SvrTermination::iteration_limit;
+  fit.summary.iterations = solution.iterations;
+  fit.summary.dual_objective = solution.objective;
+  fit.summary.max_violation = solution.max_violation;
+  fit.summary.support_vectors = support;
+  fit.summary.bounded_support_vectors = bounded;
+  fit.summary.kernel_columns = cache.columns_computed();
+  fit.summary.warm_started = warm;
+  fit.alpha = std::move(solution.alpha);
+  fit.alpha_star = std::move(solution.alpha_star);
+  fit.C = options_.C;
+  fit.summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return fit;
+}
+
+}  // namespace thermodrift
