@@ -1,5 +1,7 @@
 #include "thermodrift/sim/chamber_run.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <string>

@@ -104,10 +104,10 @@ TEST(Simulate, NoiseHasTheConfiguredWhiteLevel) {
     }
     const double n = static_cast<double>(gyro.size());
     const double mean = sum / n;
-    const double std = std::sqrt(sum2 / n - mean * mean);
+    const double noise_std = std::sqrt(sum2 / n - mean * mean);
     // White noise dominates; bias and quantization add 1-2 % of variance.
-    EXPECT_NEAR(std, white_std, 0.04 * white_std) << axis;
-    EXPECT_NEAR(std * std, expected_noise_floor(noise, 1.0, 0.0), 0.03 * std * std) << axis;
+    EXPECT_NEAR(noise_std, white_std, 0.04 * white_std) << axis;
+    EXPECT_NEAR(noise_std * noise_std, expected_noise_floor(noise, 1.0, 0.0), 0.03 * noise_std * noise_std) << axis;
     EXPECT_LT(std::abs(mean), 0.03) << axis;  // a few bias-instability σ at most
   }
 }
