@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <numbers>
@@ -139,10 +140,62 @@ void check_time_order(double previous, double current, const std::string& file, 
   }
 }
 
-ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec) {
-  CsvReader reader(path);
-  const LogColumns columns = resolve_columns(spec, reader);
+ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end) {
+  end = std::min(end, log.rows());
+  begin = std::min(begin, end);
+  auto cut = [&](const std::vector<double>& v) {
+    return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(begin),
+                               v.begin() + static_cast<std::ptrdiff_t>(end));
+  };
+  ChamberLog part;
+  part.source = log.source;
+  part.time = cut(log.time);
+  part.gyro_names = log.gyro_names;
+  part.temperature_names = log.temperature_names;
+  for (const auto& g : log.gyro) part.gyro.push_back(cut(g));
+  for (const auto& t : log.temperature) part.temperature.push_back(cut(t));
+  part.line.assign(log.line.begin() + static_cast<std::ptrdiff_t>(begin),
+                   log.line.begin() + static_cast<std::ptrdiff_t>(end));
+  return part;
+}
+
+bool read_sample(CsvReader& reader, const CsvRow& row, const LogColumns& columns, const LogSpec& spec,
+                 std::size_t row_index, double previous_time, LogSample& sample) {
+  const std::string& path = reader.path();
+  // Read every needed cell before judging the row, so one garbled cell drops the row.
+  auto cell = [&](std::size_t index, double& value) {
+    const auto status = parse_number(row.cell(index), value);
+    if (status == CellStatus::ok) return true;
+    if (status == CellStatus::not_finite || status == CellStatus::out_of_range) {
+      parse_cell(row.cell(index), path, row.line, index + 1);  // throws the one-line error
+    }
+    reader.drop_garbled(row, index + 1,
+                        row.cell(index).empty() ? std::string("empty cell, expected a number")
+                                                : fmt::format("'{}' is not a number", row.cell(index)));
+    return false;
+  };
+  if (columns.time) {
+    if (!cell(*columns.time, sample.time)) return false;
+  } else {
+    sample.time = static_cast<double>(row_index) / *spec.rate_hz;
+  }
   const double to_dph = degrees_per_hour(spec.gyro_unit);
+  sample.gyro.resize(columns.gyro.size());
+  sample.temperature.resize(columns.temperature.size());
+  for (std::size_t a = 0; a < columns.gyro.size(); ++a) {
+    if (!cell(columns.gyro[a], sample.gyro[a])) return false;
+    sample.gyro[a] *= to_dph;
+  }
+  for (std::size_t c = 0; c < columns.temperature.size(); ++c) {
+    if (!cell(columns.temperature[c], sample.temperature[c])) return false;
+  }
+  if (columns.time) check_time_order(previous_time, sample.time, path, row.line, *columns.time + 1);
+  return true;
+}
+
+ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec) {
+  CsvReader reader(path, spec.csv);
+  const LogColumns columns = resolve_columns(spec, reader);
 
   ChamberLog log;
   log.source = path;
@@ -151,27 +204,17 @@ ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec) {
   log.gyro.resize(columns.gyro.size());
   log.temperature.resize(columns.temperature.size());
 
+  LogSample sample;
   double previous_time = std::nan("");
   while (auto row = reader.next()) {
-    double time = 0;
-    if (columns.time) {
-      time = parse_cell(row->cell(*columns.time), path, row->line, *columns.time + 1);
-      check_time_order(previous_time, time, path, row->line, *columns.time + 1);
-    } else {
-      time = static_cast<double>(log.time.size()) / *spec.rate_hz;
-    }
-    previous_time = time;
-    log.time.push_back(time);
+    if (!read_sample(reader, *row, columns, spec, log.time.size(), previous_time, sample)) continue;
+    previous_time = sample.time;
+    log.time.push_back(sample.time);
     log.line.push_back(row->line);
-    for (std::size_t a = 0; a < columns.gyro.size(); ++a) {
-      const auto index = columns.gyro[a];
-      log.gyro[a].push_back(to_dph * parse_cell(row->cell(index), path, row->line, index + 1));
-    }
-    for (std::size_t c = 0; c < columns.temperature.size(); ++c) {
-      const auto index = columns.temperature[c];
-      log.temperature[c].push_back(parse_cell(row->cell(index), path, row->line, index + 1));
-    }
+    for (std::size_t a = 0; a < sample.gyro.size(); ++a) log.gyro[a].push_back(sample.gyro[a]);
+    for (std::size_t c = 0; c < sample.temperature.size(); ++c) log.temperature[c].push_back(sample.temperature[c]);
   }
+  reader.finish();
   log.warnings = reader.warnings();
   return log;
 }

@@ -59,27 +59,39 @@ char guess_delimiter(std::string_view line) {
 
 }  // namespace
 
-double parse_cell(std::string_view cell, const std::string& file, std::size_t line,
-                  std::size_t column) {
-  if (cell.empty()) throw DataError(file, line, column, "empty cell, expected a number");
-  double value = 0;
+CellStatus parse_number(std::string_view cell, double& value) {
+  if (cell.empty()) return CellStatus::empty;
   const char* begin = cell.data();
   if (cell.front() == '+') ++begin;  // from_chars does not take a leading '+'
   const auto* end = cell.data() + cell.size();
   const auto result = std::from_chars(begin, end, value);
-  if (result.ec == std::errc::result_out_of_range) {
-    throw DataError(file, line, column, fmt::format("'{}' is out of the range of a double", cell));
+  if (result.ec == std::errc::result_out_of_range) return CellStatus::out_of_range;
+  if (result.ec != std::errc{} || result.ptr != end) return CellStatus::not_a_number;
+  if (!std::isfinite(value)) return CellStatus::not_finite;
+  return CellStatus::ok;
+}
+
+std::string describe(CellStatus status, std::string_view cell) {
+  switch (status) {
+    case CellStatus::ok: return "a number";
+    case CellStatus::empty: return "empty cell, expected a number";
+    case CellStatus::not_a_number: return fmt::format("'{}' is not a number", cell);
+    case CellStatus::not_finite: return fmt::format("'{}' is not a finite number", cell);
+    case CellStatus::out_of_range: return fmt::format("'{}' is out of the range of a double", cell);
   }
-  if (result.ec != std::errc{} || result.ptr != end) {
-    throw DataError(file, line, column, fmt::format("'{}' is not a number", cell));
-  }
-  if (!std::isfinite(value)) {
-    throw DataError(file, line, column, fmt::format("'{}' is not a finite number", cell));
-  }
+  return "bad cell";
+}
+
+double parse_cell(std::string_view cell, const std::string& file, std::size_t line,
+                  std::size_t column) {
+  double value = 0;
+  const auto status = parse_number(cell, value);
+  if (status != CellStatus::ok) throw DataError(file, line, column, describe(status, cell));
   return value;
 }
 
-CsvReader::CsvReader(std::string path) : path_(std::move(path)), stream_(path_, std::ios::binary) {
+CsvReader::CsvReader(std::string path, CsvOptions options)
+    : path_(std::move(path)), options_(options), stream_(path_, std::ios::binary) {
   if (!stream_) throw DataError(path_, 0, 0, "cannot open the file for reading");
   learn_dialect();
 }
@@ -144,7 +156,17 @@ void CsvReader::learn_dialect() {
   if (!header_.empty()) {
     column_count_ = header_.size();
   } else {
-    for (const auto& row : lookahead_) column_count_ = std::max(column_count_, row.size());
+    // The most common field count of the first rows: a garbled or cut-short row among
+    // them must not set the shape of the whole log.
+    std::size_t best_votes = 0;
+    for (const auto& candidate : lookahead_) {
+      const auto votes = static_cast<std::size_t>(std::count_if(
+          lookahead_.begin(), lookahead_.end(), [&](const CsvRow& r) { return r.size() == candidate.size(); }));
+      if (votes > best_votes || (votes == best_votes && candidate.size() > column_count_)) {
+        best_votes = votes;
+        column_count_ = candidate.size();
+      }
+    }
   }
   if (lookahead_.empty()) {
     throw DataError(path_, line_number_ == 0 ? 0 : line_number_, 0,
@@ -202,12 +224,28 @@ std::optional<CsvRow> CsvReader::next() {
                                             column_count_));
         continue;
       }
-      throw DataError(path_, row->line, count + 1,
-                      fmt::format("row has {} fields, expected {}", count, column_count_));
+      drop_garbled(*row, count + 1, fmt::format("row has {} fields, expected {}", count, column_count_));
+      continue;
     }
     // Column of the first extra field: one past the expected count.
-    throw DataError(path_, row->line, column_count_ + 1,
-                    fmt::format("row has {} fields, expected {}", count, column_count_));
+    drop_garbled(*row, column_count_ + 1, fmt::format("row has {} fields, expected {}", count, column_count_));
+  }
+}
+
+void CsvReader::drop_garbled(const CsvRow& row, std::size_t column, const std::string& message) {
+  if (options_.garbled_per_thousand == 0) throw DataError(path_, row.line, column, message);
+  garbled_.push_back({row.line, column, message});
+  if (rows_returned_ > 0) --rows_returned_;  // the row was counted when handed out
+}
+
+void CsvReader::finish() const {
+  if (garbled_.empty()) return;
+  if (garbled_.size() * 1000 > options_.garbled_per_thousand * rows_returned_) {
+    const auto& first = garbled_.front();
+    throw DataError(path_, first.line, first.column,
+                    garbled_.size() == 1
+                        ? first.message
+                        : fmt::format("{} (and {} more malformed rows)", first.message, garbled_.size() - 1));
   }
 }
 
@@ -218,6 +256,9 @@ std::vector<std::string> CsvReader::warnings() const {
                               skipped_comments_ == 1 ? "" : "s"));
   }
   for (const auto& dropped : dropped_rows_) out.push_back(fmt::format("{}: {}", path_, dropped));
+  for (const auto& row : garbled_) {
+    out.push_back(fmt::format("{}:{}:{}: {}; garbled row dropped", path_, row.line, row.column, row.message));
+  }
   return out;
 }
 

@@ -26,6 +26,7 @@ struct LogSpec {
   std::vector<std::string> gyro_columns;          // empty: every header name starting "gyro"
   std::vector<std::string> temperature_columns;   // empty: every header name starting "temp"
   GyroUnit gyro_unit = GyroUnit::dph;
+  CsvOptions csv;                                 // tolerance for garbled rows
 };
 
 // Column positions (0-based) resolved against one file's header.
@@ -58,6 +59,21 @@ struct ChamberLog {
 // Reads a whole log. Every malformed cell, row or time stamp is a DataError naming
 // file, line and column.
 ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec);
+
+// Rows [begin, end) of a log, as a log of their own (a held-out cycle, say).
+ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end);
+
+// Reads the cells `columns` name from one row into time, gyro (°/h) and temperature
+// values. Returns false when the row was dropped as garbled (see CsvOptions); throws
+// DataError for NaN/Inf and, through check_time_order, for time out of order.
+// `row_index` counts the rows kept so far (time = row_index / rate without a time column).
+struct LogSample {
+  double time = 0;
+  std::vector<double> gyro;
+  std::vector<double> temperature;
+};
+bool read_sample(CsvReader& reader, const CsvRow& row, const LogColumns& columns, const LogSpec& spec,
+                 std::size_t row_index, double previous_time, LogSample& sample);
 
 // Checks one row's time stamp against the previous one (NaN for the first row); throws
 // DataError when time goes backwards or repeats. Shared by the whole-file and the

@@ -27,12 +27,21 @@ struct CsvRow {
   }
 };
 
+// A serial link that drops or merges a byte now and then garbles a row: a field too
+// many or too few, two numbers run together ("-0.3-0.31"). Such rows are dropped with a
+// warning naming line and column while they stay rare (at most `garbled_per_thousand`
+// per 1000 data rows, judged at finish()); past that, or with 0 (strict), the first one
+// is the error. NaN/Inf, time going backwards and missing columns are always errors.
+struct CsvOptions {
+  std::size_t garbled_per_thousand = 1;  // tolerated garbled rows per 1000 data rows; 0: strict
+};
+
 class CsvReader {
  public:
   // Opens `path` and reads up to the first data row to learn the dialect: delimiter,
   // header, number of columns. Throws DataError if the file cannot be read or holds no
   // data row.
-  explicit CsvReader(std::string path);
+  explicit CsvReader(std::string path, CsvOptions options = {});
 
   const std::string& path() const { return path_; }
   char delimiter() const { return delimiter_; }
@@ -47,7 +56,15 @@ class CsvReader {
   // length is a DataError naming line and column.
   std::optional<CsvRow> next();
 
+  // Drops `row` as garbled because of `column` (1-based); throws DataError instead when
+  // strict. Callers use it for cells that are not numbers.
+  void drop_garbled(const CsvRow& row, std::size_t column, const std::string& message);
+  // Call after the last row: throws DataError naming the first garbled row when they
+  // were more than the tolerated share.
+  void finish() const;
+
   std::size_t skipped_comment_lines() const { return skipped_comments_; }
+  std::size_t garbled_rows() const { return garbled_.size(); }
   // Human-readable warnings gathered so far (skipped lines, dropped cut-short rows).
   std::vector<std::string> warnings() const;
 
@@ -56,7 +73,14 @@ class CsvReader {
   void learn_dialect();
   CsvRow split(std::string line, std::size_t line_number) const;
 
+  struct Garbled {
+    std::size_t line;
+    std::size_t column;
+    std::string message;
+  };
+
   std::string path_;
+  CsvOptions options_;
   std::ifstream stream_;
   std::size_t line_number_ = 0;
   char delimiter_ = ',';
@@ -67,7 +91,12 @@ class CsvReader {
   std::size_t rows_returned_ = 0;
   std::size_t skipped_comments_ = 0;
   std::vector<std::string> dropped_rows_;
+  std::vector<Garbled> garbled_;
 };
+
+// How a cell reads as a number.
+enum class CellStatus { ok, empty, not_a_number, not_finite, out_of_range };
+CellStatus parse_number(std::string_view cell, double& value);
 
 // Parses one cell as a finite double. Throws DataError(file, line, column) naming the
 // cell when it is empty, not a number, or NaN/Inf.

@@ -1,0 +1,83 @@
+// thermodrift compensate: the input rows with one compensated column per axis. Streams
+// row by row through the same Compensator a navigation computer would run.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <memory>
+
+#include "commands.hpp"
+#include "data_options.hpp"
+#include "thermodrift/compensate/compensator.hpp"
+#include "thermodrift/error.hpp"
+#include "thermodrift/io/atomic_file.hpp"
+#include "thermodrift/io/csv_reader.hpp"
+
+namespace thermodrift::cli {
+
+namespace {
+
+struct CompensateArguments {
+  DataOptions data;
+  std::string model_file;
+  std::string out;
+};
+
+int run_compensate(const CompensateArguments& args) {
+  if (args.data.files.size() != 1) throw UsageError("compensate takes one --data file");
+  const std::string& path = args.data.files.front();
+  DriftModel model = load_drift_model(args.model_file);
+  const LogSpec spec = args.data.spec_for(model);
+  CsvReader reader(path, spec.csv);
+  const LogColumns columns = resolve_columns(spec, reader);
+  if (columns.temperature.size() != 1 && columns.temperature.size() != columns.gyro.size()) {
+    throw UsageError("give one temperature column for all axes or one per axis");
+  }
+  AtomicFile out(args.out, {path, args.model_file});
+  auto& stream = out.stream();
+  const std::string delimiter(1, reader.delimiter());
+  if (reader.has_header()) {
+    stream << fmt::format("{}", fmt::join(reader.header(), delimiter));
+    for (const auto& axis : model.axes) stream << delimiter << axis.name << "_comp_dph";
+    stream << '\n';
+  }
+
+  Compensator compensator(std::move(model));
+  const std::size_t axes = compensator.axes();
+  std::vector<double> temperatures(axes);
+  LogSample sample;
+  double previous_time = std::nan("");
+  std::size_t row_index = 0;
+  std::string line;
+  while (auto row = reader.next()) {
+    if (!read_sample(reader, *row, columns, spec, row_index, previous_time, sample)) continue;
+    previous_time = sample.time;
+    ++row_index;
+    for (std::size_t a = 0; a < axes; ++a) {
+      temperatures[a] = sample.temperature[sample.temperature.size() == 1 ? 0 : a];
+    }
+    const auto& result = compensator.push(sample.time, sample.gyro, temperatures);
+    line.assign(row->text);
+    for (std::size_t a = 0; a < axes; ++a) {
+      fmt::format_to(std::back_inserter(line), "{}{:.9g}", delimiter, result.compensated[a]);
+    }
+    line += '\n';
+    stream << line;
+  }
+  reader.finish();
+  for (const auto& warning : reader.warnings()) warn(warning);
+  out.commit();
+  return 0;
+}
+
+}  // namespace
+
+Command add_compensate(CLI::App& parent) {
+  auto args = std::make_shared<CompensateArguments>();
+  CLI::App* app = parent.add_subcommand("compensate", "write the log with compensated gyro columns (°/h)");
+  app->add_option("--model", args->model_file, "model file written by fit")->required()->check(CLI::ExistingFile);
+  args->data.add_to(*app);
+  app->add_option("--out", args->out, "output CSV")->required();
+  return {app, [args] { return run_compensate(*args); }};
+}
+
+}  // namespace thermodrift::cli

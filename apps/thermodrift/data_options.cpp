@@ -1,0 +1,70 @@
+#include "data_options.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift::cli {
+
+void warn(const std::string& message) { std::fprintf(stderr, "thermodrift: warning: %s\n", message.c_str()); }
+
+void DataOptions::add_to(CLI::App& app) {
+  app.add_option("--data", files, "the log(s): CSV, header row or not; several are fitted together")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--format", format, "csv (default) or libsvm")
+      ->check(CLI::IsMember({"csv", "libsvm"}));
+  app.add_option("--time", time, "time column (seconds), header name or 1-based index");
+  app.add_option("--rate", rate, "sampling rate in Hz when there is no time column")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--gyro", gyro, "gyro column(s), one model per axis")->delimiter(',');
+  app.add_option("--temp", temperature, "temperature column(s): one for all axes or one per axis")
+      ->delimiter(',');
+  app.add_option("--gyro-unit", gyro_unit, "unit of the gyro columns: dph (°/h), dps (°/s), radps")
+      ->check(CLI::IsMember({"dph", "dps", "radps"}));
+  app.add_option("--smooth", smooth, "moving-average window in seconds (default 100)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+LogSpec DataOptions::spec() const {
+  LogSpec spec;
+  if (!time.empty()) spec.time_column = time;
+  if (rate > 0) spec.rate_hz = rate;
+  spec.gyro_columns = gyro;
+  spec.temperature_columns = temperature;
+  spec.gyro_unit = parse_gyro_unit(gyro_unit);
+  return spec;
+}
+
+LogSpec DataOptions::spec_for(const DriftModel& model) const {
+  LogSpec spec = model.log_spec();
+  if (!time.empty()) {
+    spec.time_column = time;
+    spec.rate_hz.reset();
+  }
+  if (rate > 0) {
+    spec.rate_hz = rate;
+    spec.time_column.reset();
+  }
+  if (!gyro.empty()) spec.gyro_columns = gyro;
+  if (!temperature.empty()) spec.temperature_columns = temperature;
+  if (spec.gyro_columns.size() != model.axes.size()) {
+    throw UsageError(fmt::format("the model has {} axes but {} gyro columns were named",
+                                 model.axes.size(), spec.gyro_columns.size()));
+  }
+  return spec;
+}
+
+std::vector<ChamberLog> DataOptions::read(const LogSpec& spec) const {
+  if (format != "csv") throw UsageError("this command reads CSV logs only (--format csv)");
+  std::vector<ChamberLog> logs;
+  for (const auto& file : files) {
+    logs.push_back(read_chamber_log(file, spec));
+    for (const auto& warning : logs.back().warnings) warn(warning);
+  }
+  return logs;
+}
+
+}  // namespace thermodrift::cli

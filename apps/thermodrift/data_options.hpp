@@ -1,0 +1,41 @@
+// The data options every command that reads a log shares (CLI.md, "Data options").
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/models/model_file.hpp"
+
+namespace thermodrift::cli {
+
+struct DataOptions {
+  std::vector<std::string> files;
+  std::string format = "csv";
+  std::string time;
+  double rate = 0;
+  std::vector<std::string> gyro;
+  std::vector<std::string> temperature;
+  std::string gyro_unit = "dph";
+  double smooth = 100;
+
+  // Declares --data, --format, --time, --rate, --gyro, --temp, --gyro-unit, --smooth.
+  void add_to(CLI::App& app);
+
+  // The LogSpec the options name.
+  LogSpec spec() const;
+  // The model's LogSpec, with any column option given on the command line taking over.
+  LogSpec spec_for(const DriftModel& model) const;
+  bool smooth_given(const CLI::App& app) const { return app.count("--smooth") > 0; }
+
+  // Reads every --data file; warnings (skipped banners, dropped rows) go to stderr.
+  std::vector<ChamberLog> read(const LogSpec& spec) const;
+};
+
+// "thermodrift: warning: ..." on stderr.
+void warn(const std::string& message);
+
+}  // namespace thermodrift::cli

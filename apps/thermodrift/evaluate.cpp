@@ -1,0 +1,51 @@
+// thermodrift evaluate: residual metrics of a model on a log it may not have seen.
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "data_options.hpp"
+#include "output.hpp"
+#include "thermodrift/tune/calibration.hpp"
+
+namespace thermodrift::cli {
+
+namespace {
+
+struct EvaluateArguments {
+  DataOptions data;
+  std::string model_file;
+  bool json = false;
+};
+
+int run_evaluate(const EvaluateArguments& args) {
+  const DriftModel model = load_drift_model(args.model_file);
+  const auto logs = args.data.read(args.data.spec_for(model));
+  const auto metrics = evaluate(model, logs);
+  nlohmann::json result = {{"command", "evaluate"},
+                           {"model_file", args.model_file},
+                           {"evaluation", "on the given logs (held-out if the model was not fitted on them)"}};
+  nlohmann::json axes = nlohmann::json::array();
+  for (std::size_t a = 0; a < metrics.size(); ++a) {
+    nlohmann::json entry = metrics[a].to_json();
+    entry["name"] = model.axes[a].name;
+    entry["model"] = model.axes[a].kind;
+    axes.push_back(entry);
+  }
+  result["axes"] = axes;
+  print_axes(result, args.json, fmt::format("{} on {}", args.model_file, fmt::join(args.data.files, ", ")));
+  return 0;
+}
+
+}  // namespace
+
+Command add_evaluate(CLI::App& parent) {
+  auto args = std::make_shared<EvaluateArguments>();
+  CLI::App* app = parent.add_subcommand("evaluate", "residual metrics of a model on a log");
+  app->add_option("--model", args->model_file, "model file written by fit")->required()->check(CLI::ExistingFile);
+  args->data.add_to(*app);
+  app->add_flag("--json", args->json, "print one JSON object on stdout");
+  return {app, [args] { return run_evaluate(*args); }};
+}
+
+}  // namespace thermodrift::cli

@@ -1,0 +1,101 @@
+// thermodrift fit: one drift model per gyro axis, written to one model file.
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "data_options.hpp"
+#include "output.hpp"
+#include "thermodrift/error.hpp"
+#include "thermodrift/tune/calibration.hpp"
+
+namespace thermodrift::cli {
+
+namespace {
+
+struct FitArguments {
+  DataOptions data;
+  std::string model = "linear";
+  double C = 0;
+  double sigma = 0;
+  double gamma = 0;
+  double epsilon = 0.01;
+  double tolerance = 1e-3;
+  double rate_span = 0;
+  std::size_t decimate = 0;
+  std::vector<std::string> features{"dT", "rate"};
+  std::string out;
+  bool json = false;
+};
+
+int run_fit(const FitArguments& args, const CLI::App& app) {
+  CalibrationOptions options;
+  options.model = args.model;
+  options.smooth_seconds = args.data.smooth;
+  if (args.rate_span > 0) options.rate_span_seconds = args.rate_span;
+  if (args.decimate > 0) options.decimation = args.decimate;
+  options.terms = args.features;
+  if (args.model == "svr") {
+    if (app.count("--sigma") && app.count("--gamma")) {
+      throw UsageError("give --sigma or --gamma, not both (gamma = 1/(2 sigma²))");
+    }
+    options.svr.C = app.count("--C") ? args.C : 100.0;
+    if (app.count("--gamma")) {
+      options.svr.gamma = args.gamma;
+    } else {
+      const double sigma = app.count("--sigma") ? args.sigma : 1.0;
+      options.svr.gamma = 1.0 / (2.0 * sigma * sigma);
+    }
+    options.svr.epsilon = args.epsilon;
+    options.svr.tolerance = args.tolerance;
+  }
+  const LogSpec spec = args.data.spec();
+  const auto logs = args.data.read(spec);
+  const Calibration calibration = calibrate(logs, spec, options);
+  save_drift_model(calibration.model, args.out, args.data.files);
+
+  nlohmann::json result = {{"command", "fit"}, {"model_file", args.out}, {"evaluation", "in-sample"}};
+  nlohmann::json axes = nlohmann::json::array();
+  for (std::size_t a = 0; a < calibration.model.axes.size(); ++a) {
+    const auto& axis = calibration.model.axes[a];
+    nlohmann::json entry = calibration.axes[a].in_sample.to_json();
+    entry["name"] = axis.name;
+    entry["model"] = axis.kind;
+    entry["params"] = axis.fit.value("params", nlohmann::json::object());
+    entry["evaluations"] = axis.fit.value("evaluations", 1);
+    entry["seconds"] = calibration.axes[a].seconds;
+    entry["training_samples"] = calibration.axes[a].training_samples;
+    axes.push_back(entry);
+  }
+  result["axes"] = axes;
+  print_axes(result, args.json,
+             fmt::format("{} model written to {} (metrics in-sample, on the training data: optimistic)",
+                         args.model, args.out));
+  return 0;
+}
+
+}  // namespace
+
+Command add_fit(CLI::App& parent) {
+  auto args = std::make_shared<FitArguments>();
+  CLI::App* app = parent.add_subcommand("fit", "fit one drift model per gyro axis");
+  args->data.add_to(*app);
+  app->add_option("--model", args->model, "linear, stepwise or svr")
+      ->check(CLI::IsMember({"linear", "stepwise", "svr"}));
+  app->add_option("--C", args->C, "SVR penalty C")->check(CLI::PositiveNumber);
+  app->add_option("--sigma", args->sigma, "RBF width σ, on standardized features")->check(CLI::PositiveNumber);
+  app->add_option("--gamma", args->gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(CLI::PositiveNumber);
+  app->add_option("--epsilon", args->epsilon, "SVR tube half-width, standardized target units (libsvm -p)")
+      ->check(CLI::NonNegativeNumber);
+  app->add_option("--tol", args->tolerance, "SVR stopping tolerance (libsvm -e)")->check(CLI::PositiveNumber);
+  app->add_option("--rate-span", args->rate_span, "span of the dT/dt difference in seconds (default: --smooth)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--features", args->features, "feature terms (default dT,rate)")->delimiter(',');
+  app->add_option("--out", args->out, "model file to write")->required();
+  app->add_flag("--json", args->json, "print one JSON object on stdout");
+  return {app, [args, app] { return run_fit(*args, *app); }};
+}
+
+}  // namespace thermodrift::cli

@@ -1,0 +1,43 @@
+// Real-time compensation: push one sample (time, gyro rates, temperatures), get the
+// compensated rates. Only the past is used, through the same FeatureStream the model was
+// fitted with; no allocation per sample once warmed up.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "thermodrift/features/pipeline.hpp"
+#include "thermodrift/models/model_file.hpp"
+
+namespace thermodrift {
+
+class Compensator {
+ public:
+  explicit Compensator(DriftModel model);
+  Compensator(const Compensator&) = delete;  // streams point into the model
+  Compensator& operator=(const Compensator&) = delete;
+
+  std::size_t axes() const { return model_.axes.size(); }
+  const DriftModel& model() const { return model_; }
+
+  struct Output {
+    std::span<const double> drift;        // predicted drift per axis, °/h
+    std::span<const double> compensated;  // gyro - drift per axis, °/h
+    bool ready = false;                   // false during warm-up (start or after a gap)
+  };
+
+  // `gyro` in °/h, one per axis; `temperatures`, one per axis. `time` must increase.
+  // During warm-up the drift is predicted from the history there is (a partial window,
+  // a shorter rate span): the best causal estimate, flagged by ready = false.
+  const Output& push(double time, std::span<const double> gyro, std::span<const double> temperatures);
+  void reset();
+
+ private:
+  DriftModel model_;
+  std::vector<FeatureStream> streams_;
+  std::vector<double> drift_;
+  std::vector<double> compensated_;
+  Output output_;
+};
+
+}  // namespace thermodrift

@@ -1,0 +1,45 @@
+// The seed's study on one log: per axis, each model fitted on the earlier part of the
+// log and judged both in-sample (as the paper reports) and on the later, held-out part
+// (blocked in time).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/tune/calibration.hpp"
+
+namespace thermodrift {
+
+struct StudyOptions {
+  std::vector<std::string> models{"linear", "stepwise", "svr"};  // models compared
+  CalibrationOptions calibration;           // shared settings; `model` is set per entry of `models`
+  std::optional<std::size_t> split_row;     // first held-out row; default: the last 30 % of the log
+  double holdout_fraction = 0.3;            // used when split_row is not given
+  std::function<void(const std::string&)> progress;  // one line per step; may be empty
+};
+
+struct ModelStudy {
+  std::string model;
+  Calibration calibration;                 // fitted on the training part
+  std::vector<ResidualMetrics> in_sample;  // per axis, training part
+  std::vector<ResidualMetrics> held_out;   // per axis, held-out part
+  double seconds = 0;
+};
+
+struct Study {
+  std::size_t split_row = 0;
+  double split_time = 0;
+  std::string split_description;
+  std::vector<ModelStudy> models;
+
+  nlohmann::json to_json() const;
+};
+
+Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& options);
+
+}  // namespace thermodrift

@@ -1,0 +1,55 @@
+// Calibration: from chamber logs to a drift model, one model per gyro axis (the seed's
+// self-regression). Joins the feature pipeline, the models and, for SVR, the tuner.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/models/metrics.hpp"
+#include "thermodrift/models/model_file.hpp"
+#include "thermodrift/models/svr.hpp"
+
+namespace thermodrift {
+
+struct CalibrationOptions {
+  std::string model = "linear";            // "linear", "stepwise" or "svr"
+  double smooth_seconds = 100;             // moving-average window (seed: 100 s)
+  std::optional<double> rate_span_seconds; // dT/dt span; default: the smoothing window (at least 1 s)
+  std::optional<std::size_t> decimation;   // default: about 10 samples per smoothing window
+  std::vector<std::string> terms{"dT", "rate"};  // feature terms (the seed's pair)
+  SvrOptions svr;                          // C, gamma, epsilon, tolerance for --model svr (standardized units)
+};
+
+// Which temperature channel feeds each axis: one channel for all axes, or one per axis.
+// Throws UsageError otherwise.
+std::vector<std::size_t> temperature_channel_per_axis(const ChamberLog& log);
+
+struct AxisCalibration {
+  ResidualMetrics in_sample;   // on every ready (undecimated) sample of the training logs
+  std::size_t training_samples = 0;  // after decimation
+  double seconds = 0;
+};
+
+struct Calibration {
+  DriftModel model;
+  std::vector<AxisCalibration> axes;
+};
+
+// Fits one model per axis over all `logs` together (each log is its own segment: no
+// smoothing across files). `spec` is how the logs were read; it is stored in the model.
+Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
+                      const CalibrationOptions& options);
+
+// The pipeline's ready samples of one axis of several logs, in order.
+FeatureTable feature_table(const std::vector<ChamberLog>& logs, const Pipeline& pipeline,
+                           std::size_t axis, bool decimate);
+
+// Metrics of a fitted model on logs it may not have seen (every ready sample).
+std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs);
+
+}  // namespace thermodrift

@@ -1,0 +1,30 @@
+#include "thermodrift/compensate/compensator.hpp"
+
+namespace thermodrift {
+
+Compensator::Compensator(DriftModel model)
+    : model_(std::move(model)), drift_(model_.axes.size()), compensated_(model_.axes.size()) {
+  streams_.reserve(model_.axes.size());
+  for (const auto& axis : model_.axes) streams_.emplace_back(axis.pipeline);
+  output_.drift = drift_;
+  output_.compensated = compensated_;
+}
+
+void Compensator::reset() {
+  for (auto& stream : streams_) stream.reset();
+}
+
+const Compensator::Output& Compensator::push(double time, std::span<const double> gyro,
+                                             std::span<const double> temperatures) {
+  bool ready = true;
+  for (std::size_t a = 0; a < streams_.size(); ++a) {
+    const auto& sample = streams_[a].push(time, gyro[a], temperatures[a]);
+    drift_[a] = model_.axes[a].predict(sample.features);
+    compensated_[a] = gyro[a] - drift_[a];
+    ready = ready && sample.ready;
+  }
+  output_.ready = ready;
+  return output_;
+}
+
+}  // namespace thermodrift

@@ -1,0 +1,62 @@
+#include "thermodrift/report/study.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+
+nlohmann::json Study::to_json() const {
+  nlohmann::json models_json = nlohmann::json::array();
+  for (const auto& m : models) {
+    nlohmann::json axes = nlohmann::json::array();
+    for (std::size_t a = 0; a < m.in_sample.size(); ++a) {
+      const auto& axis = m.calibration.model.axes[a];
+      axes.push_back({{"name", axis.name},
+                      {"in_sample", m.in_sample[a].to_json()},
+                      {"held_out", m.held_out[a].to_json()},
+                      {"fit", axis.fit}});
+    }
+    models_json.push_back({{"model", m.model}, {"seconds", m.seconds}, {"axes", axes}});
+  }
+  return {{"split", {{"row", split_row}, {"time_s", split_time}, {"description", split_description}}},
+          {"models", models_json}};
+}
+
+Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& options) {
+  Study study;
+  if (options.split_row) {
+    study.split_row = *options.split_row;
+    study.split_description = fmt::format("held out from row {} on", study.split_row);
+  } else {
+    study.split_row = static_cast<std::size_t>(std::floor(static_cast<double>(log.rows()) *
+                                                          (1.0 - options.holdout_fraction)));
+    study.split_description = fmt::format("last {:.0f} % of the log held out", 100 * options.holdout_fraction);
+  }
+  if (study.split_row == 0 || study.split_row >= log.rows()) {
+    throw UsageError(fmt::format("split row {} leaves no training or no held-out data", study.split_row));
+  }
+  study.split_time = log.time[study.split_row];
+  const std::vector<ChamberLog> training{slice_rows(log, 0, study.split_row)};
+  const std::vector<ChamberLog> held_out{slice_rows(log, study.split_row, log.rows())};
+
+  for (const auto& name : options.models) {
+    if (options.progress) options.progress(fmt::format("fitting {} on {} rows", name, training.front().rows()));
+    const auto start = std::chrono::steady_clock::now();
+    ModelStudy entry;
+    entry.model = name;
+    CalibrationOptions calibration_options = options.calibration;
+    calibration_options.model = name;
+    entry.calibration = calibrate(training, spec, calibration_options);
+    for (const auto& axis : entry.calibration.axes) entry.in_sample.push_back(axis.in_sample);
+    entry.held_out = evaluate(entry.calibration.model, held_out);
+    entry.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    study.models.push_back(std::move(entry));
+  }
+  return study;
+}
+
+}  // namespace thermodrift

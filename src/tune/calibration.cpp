@@ -1,0 +1,195 @@
+#include "thermodrift/tune/calibration.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "thermodrift/error.hpp"
+#include "thermodrift/models/linear.hpp"
+#include "thermodrift/models/svr_model.hpp"
+
+namespace thermodrift {
+
+std::vector<std::size_t> temperature_channel_per_axis(const ChamberLog& log) {
+  std::vector<std::size_t> channels(log.axes(), 0);
+  if (log.temperature.size() == 1) return channels;
+  if (log.temperature.size() == log.axes()) {
+    for (std::size_t a = 0; a < channels.size(); ++a) channels[a] = a;
+    return channels;
+  }
+  throw UsageError(fmt::format("{}: {} temperature columns for {} gyro axes; give one for all "
+                               "axes or one per axis with --temp",
+                               log.source, log.temperature.size(), log.axes()));
+}
+
+FeatureTable feature_table(const std::vector<ChamberLog>& logs, const Pipeline& pipeline,
+                           std::size_t axis, bool decimate) {
+  FeatureTable table;
+  for (const auto& log : logs) {
+    const auto channels = temperature_channel_per_axis(log);
+    append_rows(table, build_feature_table(pipeline, log, axis, channels.at(axis), decimate));
+  }
+  return table;
+}
+
+namespace {
+
+double median_sample_interval(const ChamberLog& log) {
+  if (log.rows() < 2) return 1.0;
+  std::vector<double> steps;
+  const std::size_t stride = std::max<std::size_t>(1, log.rows() / 1000);
+  for (std::size_t i = stride; i < log.rows(); i += stride) steps.push_back(log.time[i] - log.time[i - 1]);
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return steps[steps.size() / 2];
+}
+
+Pipeline make_pipeline(const std::vector<ChamberLog>& logs, std::size_t axis,
+                       const CalibrationOptions& options) {
+  Pipeline pipeline;
+  pipeline.smooth_seconds = options.smooth_seconds;
+  pipeline.rate_span_seconds = options.rate_span_seconds.value_or(std::max(options.smooth_seconds, 1.0));
+  pipeline.decimation =
+      options.decimation.value_or(default_decimation(options.smooth_seconds, median_sample_interval(logs.front())));
+  pipeline.terms.clear();
+  for (const auto& term : options.terms) pipeline.terms.push_back(FeatureTerm::parse(term));
+  // ΔT is measured from the mean temperature of the training logs.
+  double sum = 0;
+  std::size_t count = 0;
+  for (const auto& log : logs) {
+    const auto& channel = log.temperature[temperature_channel_per_axis(log).at(axis)];
+    for (double t : channel) sum += t;
+    count += channel.size();
+  }
+  pipeline.reference_temperature = count ? sum / static_cast<double>(count) : 0.0;
+  pipeline.validate();
+  return pipeline;
+}
+
+void require_samples(const FeatureTable& table, const Pipeline& pipeline, const std::vector<ChamberLog>& logs,
+                     std::size_t needed) {
+  if (table.rows() >= needed) return;
+  double longest = 0;
+  for (const auto& log : logs) {
+    if (log.rows() > 0) longest = std::max(longest, log.time.back() - log.time.front());
+  }
+  throw DataError(logs.front().source, 0, 0,
+                  fmt::format("too little data after the {:g} s warm-up (smoothing {:g} s + rate span "
+                              "{:g} s): {} usable samples, at least {} needed; the longest log spans "
+                              "{:g} s (a shorter --smooth helps)",
+                              pipeline.warm_up_seconds(), pipeline.smooth_seconds,
+                              pipeline.rate_span_seconds, table.rows(), needed, longest));
+}
+
+}  // namespace
+
+Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
+                      const CalibrationOptions& options) {
+  if (logs.empty()) throw UsageError("no log to calibrate on");
+  const auto& first = logs.front();
+  for (const auto& log : logs) {
+    if (log.axes() != first.axes() || log.temperature.size() != first.temperature.size()) {
+      throw UsageError(fmt::format("{} and {} have different numbers of gyro or temperature columns",
+                                   first.source, log.source));
+    }
+  }
+  Calibration calibration;
+  calibration.model.gyro_unit = spec.gyro_unit;
+  calibration.model.time_column = spec.time_column;
+  calibration.model.rate_hz = spec.rate_hz;
+  const auto channels = temperature_channel_per_axis(first);
+
+  for (std::size_t axis = 0; axis < first.axes(); ++axis) {
+    const auto start = std::chrono::steady_clock::now();
+    AxisModel axis_model;
+    axis_model.name = first.gyro_names[axis];
+    axis_model.gyro_column = spec.gyro_columns.empty() ? first.gyro_names[axis] : spec.gyro_columns[axis];
+    const auto channel = channels[axis];
+    axis_model.temperature_column = spec.temperature_columns.empty()
+                                        ? first.temperature_names[channel]
+                                        : spec.temperature_columns[channel];
+    axis_model.pipeline = make_pipeline(logs, axis, options);
+    axis_model.kind = options.model;
+    const auto& pipeline = axis_model.pipeline;
+
+    const FeatureTable training = feature_table(logs, pipeline, axis, true);
+    const auto terms = pipeline.term_names();
+    nlohmann::json fit = {{"terms", terms}};
+    if (options.model == "linear") {
+      require_samples(training, pipeline, logs, pipeline.terms.size() + 2);
+      axis_model.model = fit_least_squares(training.features, training.target,
+                                           linear_regressors(pipeline.terms.size()));
+    } else if (options.model == "stepwise") {
+      require_samples(training, pipeline, logs, 2 * pipeline.terms.size() + 4);
+      auto stepwise = fit_stepwise(training.features, training.target,
+                                   quadratic_regressors(pipeline.terms.size()), terms);
+      nlohmann::json path = nlohmann::json::array();
+      for (const auto& step : stepwise.path) {
+        path.push_back({{"action", step.action}, {"regressor", step.regressor}, {"F", step.f_statistic}});
+      }
+      fit["stepwise_path"] = path;
+      axis_model.model = std::move(stepwise.model);
+    } else if (options.model == "svr") {
+      require_samples(training, pipeline, logs, 3);
+      SvrModel svr;
+      svr.scaling = Standardization::of(training.features, training.target);
+      const SvrTrainer trainer(options.svr);
+      const SvrFit result = trainer.train(svr.scaling.features(training.features),
+                                          svr.scaling.target(training.target));
+      svr.function = result.function;
+      svr.C = options.svr.C;
+      svr.epsilon = options.svr.epsilon;
+      svr.converged = result.summary.termination == SvrTermination::converged;
+      fit["params"] = {{"C", svr.C},
+                       {"sigma", svr.sigma()},
+                       {"gamma", svr.function.gamma},
+                       {"epsilon", svr.epsilon}};
+      fit["solver"] = {{"termination", to_string(result.summary.termination)},
+                       {"iterations", result.summary.iterations},
+                       {"support_vectors", result.summary.support_vectors},
+                       {"dual_objective", result.summary.dual_objective}};
+      fit["evaluations"] = 1;
+      axis_model.model = std::move(svr);
+    } else {
+      throw UsageError(fmt::format("unknown model '{}' (expected linear, stepwise or svr)", options.model));
+    }
+
+    AxisCalibration report;
+    const FeatureTable every = feature_table(logs, pipeline, axis, false);
+    report.in_sample = residual_metrics(every.target, axis_model.predict(every.features));
+    report.training_samples = training.rows();
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    fit["training_samples"] = report.training_samples;
+    fit["in_sample"] = report.in_sample.to_json();
+    fit["seconds"] = report.seconds;
+    axis_model.fit = std::move(fit);
+    calibration.model.axes.push_back(std::move(axis_model));
+    calibration.axes.push_back(report);
+  }
+  return calibration;
+}
+
+std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs) {
+  std::vector<ResidualMetrics> metrics;
+  for (std::size_t axis = 0; axis < model.axes.size(); ++axis) {
+    const auto& axis_model = model.axes[axis];
+    FeatureTable table;
+    for (const auto& log : logs) {
+      if (log.axes() != model.axes.size()) {
+        throw DataError(log.source, 0, 0,
+                        fmt::format("the model has {} axes but {} gyro columns were read",
+                                    model.axes.size(), log.axes()));
+      }
+      const auto channel = temperature_channel_per_axis(log).at(axis);
+      append_rows(table, build_feature_table(axis_model.pipeline, log, axis, channel, false));
+    }
+    if (table.rows() == 0) {
+      throw DataError(logs.front().source, 0, 0,
+                      fmt::format("no usable samples after the {:g} s warm-up", axis_model.pipeline.warm_up_seconds()));
+    }
+    metrics.push_back(residual_metrics(table.target, axis_model.predict(table.features)));
+  }
+  return metrics;
+}
+
+}  // namespace thermodrift
