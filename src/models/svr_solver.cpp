@@ -58,7 +58,9 @@ class SvrSmo {
         alpha_(size_, 0.0),
         alpha_star_(size_, 0.0),
         residual_(size_),
-        bounded_part_(size_, 0.0) {
+        bounded_part_(size_, 0.0),
+        up_offset_(size_),
+        low_offset_(size_) {
     active_.resize(size_);
     for (int sample = 0; sample < size_; ++sample) active_[sample] = sample;
   }
@@ -67,6 +69,20 @@ class SvrSmo {
   SmoSolution solve();
 
  private:
+  void refresh_offsets(int sample) {
+    const double a = alpha_[sample], a_star = alpha_star_[sample];
+    up_offset_[sample] = a_star > 0 ? epsilon_ : (a < C_ ? -epsilon_ : -kInfinity);
+    low_offset_[sample] = a > 0 ? -epsilon_ : (a_star < C_ ? epsilon_ : kInfinity);
+  }
+  // Calls body(sample) for every active sample; a plain counted loop when all are active.
+  template <typename Body>
+  void for_active(Body&& body) const {
+    if (all_active()) {
+      for (int sample = 0; sample < size_; ++sample) body(sample);
+    } else {
+      for (int sample : active_) body(sample);
+    }
+  }
   double& value_of(Variable v) { return v.half == 0 ? alpha_[v.sample] : alpha_star_[v.sample]; }
   bool all_active() const { return static_cast<int>(active_.size()) == size_; }
   void find_first();
@@ -90,6 +106,12 @@ class SvrSmo {
   std::vector<double> alpha_star_;
   std::vector<double> residual_;      // z - Kβ, up to date on active samples
   std::vector<double> bounded_part_;  // K β_C, β_C = C·[α = C] - C·[α* = C], on all samples
+  // Per sample, the offset of its best I_up candidate from r (max over its two halves of
+  // -y G - r: +ε if α* > 0, else -ε if α < C, else -∞) and of its best I_low candidate
+  // (min of -y G - r: -ε if α > 0, else +ε if α* < C, else +∞). The selection loops read
+  // one number per sample instead of testing both halves.
+  std::vector<double> up_offset_;
+  std::vector<double> low_offset_;
   std::vector<int> active_;           // samples in the working problem, ascending
   bool unshrunk_ = false;
 
@@ -103,6 +125,7 @@ void SvrSmo::start_from(const Eigen::VectorXd& alpha, const Eigen::VectorXd& alp
   for (int sample = 0; sample < size_; ++sample) {
     alpha_[sample] = alpha(sample);
     alpha_star_[sample] = alpha_star(sample);
+    refresh_offsets(sample);
   }
   for (int sample = 0; sample < size_; ++sample) residual_[sample] = targets_(sample);
   for (int sample = 0; sample < size_; ++sample) {
@@ -132,19 +155,17 @@ std::pair<double, double> SvrSmo::violation_bounds(const std::vector<int>& sampl
 }
 
 void SvrSmo::find_first() {
-  first_value_ = -kInfinity;
-  first_ = Variable{};
-  for (int sample : active_) {
-    const double r = residual_[sample];
-    if (alpha_[sample] < C_ && r - epsilon_ >= first_value_) {
-      first_value_ = r - epsilon_;
-      first_ = Variable{sample, 0};
+  double best = -kInfinity;
+  int best_sample = -1;
+  for_active([&](int sample) {
+    const double value = residual_[sample] + up_offset_[sample];
+    if (value > best) {
+      best = value;
+      best_sample = sample;
     }
-    if (alpha_star_[sample] > 0 && r + epsilon_ >= first_value_) {
-      first_value_ = r + epsilon_;
-      first_ = Variable{sample, 1};
-    }
-  }
+  });
+  first_value_ = best;
+  first_ = best_sample < 0 ? Variable{} : Variable{best_sample, alpha_star_[best_sample] > 0 ? 1 : 0};
   first_known_ = true;
 }
 
@@ -156,26 +177,25 @@ bool SvrSmo::select_working_set(Variable* first, Variable* second) {
   if (first_.sample < 0) return true;
   const double* first_column = cache_.column(first_.sample, active_, false);
 
+  // For each sample only its I_low half with the smaller -y G can win: both share the
+  // curvature K_ii + K_jj - 2 K_ij = 2 - 2 K_ij (K_ii = 1) and the larger gap wins.
   double smallest_low = kInfinity;  // M(a)
-  double best_decrease = kInfinity;
-  *second = Variable{};
-  auto consider = [&](int sample, int half, double value, double kernel_value) {
+  double best_score = 0;            // (m - v)² / curvature, the decrease of the objective
+  int best_sample = -1;
+  const double* residual = residual_.data();
+  const double* low_offset = low_offset_.data();
+  for_active([&](int sample) {
+    const double value = residual[sample] + low_offset[sample];
     smallest_low = std::min(smallest_low, value);
     const double gap = largest_up - value;
-    if (gap <= 0) return;
-    double curvature = 2.0 - 2.0 * kernel_value;  // K_ii + K_jj - 2 K_ij, K_ii = 1
-    if (curvature <= 0) curvature = kTau;
-    const double decrease = -(gap * gap) / curvature;
-    if (decrease <= best_decrease) {
-      best_decrease = decrease;
-      *second = Variable{sample, half};
+    double curvature = 2.0 - 2.0 * first_column[sample];
+    curvature = curvature > 0 ? curvature : kTau;
+    if (gap > 0 && gap * gap > best_score * curvature) {  // score > best, without a division
+      best_score = gap * gap / curvature;
+      best_sample = sample;
     }
-  };
-  for (int sample : active_) {
-    const double r = residual_[sample];
-    if (alpha_[sample] > 0) consider(sample, 0, r - epsilon_, first_column[sample]);
-    if (alpha_star_[sample] < C_) consider(sample, 1, r + epsilon_, first_column[sample]);
-  }
+  });
+  *second = best_sample < 0 ? Variable{} : Variable{best_sample, alpha_[best_sample] > 0 ? 0 : 1};
   return largest_up - smallest_low < settings_.tolerance || second->sample < 0;
 }
 
@@ -238,24 +258,23 @@ void SvrSmo::take_step(Variable first, Variable second) {
     change_i += change_j;
     change_j = 0;
   }
+  refresh_offsets(first.sample);
+  refresh_offsets(second.sample);
   double* residual = residual_.data();
-  const double* alpha = alpha_.data();
-  const double* alpha_star = alpha_star_.data();
-  const double epsilon = epsilon_;
+  const double* up_offset = up_offset_.data();
   double best = -kInfinity;
-  Variable best_variable;
-  for (int sample : active_) {
+  int best_sample = -1;
+  for_active([&](int sample) {
     const double r = residual[sample] - change_i * first_column[sample] - change_j * second_column[sample];
     residual[sample] = r;
-    if (alpha[sample] < C && r - epsilon >= best) {
-      best = r - epsilon;
-      best_variable = Variable{sample, 0};
+    const double value = r + up_offset[sample];
+    if (value > best) {
+      best = value;
+      best_sample = sample;
     }
-    if (alpha_star[sample] > 0 && r + epsilon >= best) {
-      best = r + epsilon;
-      best_variable = Variable{sample, 1};
-    }
-  }
+  });
+  const Variable best_variable =
+      best_sample < 0 ? Variable{} : Variable{best_sample, alpha_star_[best_sample] > 0 ? 1 : 0};
   first_ = best_variable;
   first_value_ = best;
   first_known_ = true;
