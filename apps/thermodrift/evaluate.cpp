@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "data_options.hpp"
 #include "output.hpp"
+#include "thermodrift/error.hpp"
 #include "thermodrift/tune/calibration.hpp"
 
 namespace thermodrift::cli {
@@ -20,8 +21,14 @@ struct EvaluateArguments {
 
 int run_evaluate(const EvaluateArguments& args) {
   const DriftModel model = load_drift_model(args.model_file);
-  const auto logs = args.data.read(args.data.spec_for(model));
-  const auto metrics = evaluate(model, logs);
+  std::vector<ResidualMetrics> metrics;
+  if (args.data.format == "libsvm") {
+    if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
+    const auto& file = args.data.files.front();
+    metrics.push_back(evaluate_libsvm(model, read_libsvm(file), file));
+  } else {
+    metrics = evaluate(model, args.data.read(args.data.spec_for(model)));
+  }
   nlohmann::json result = {{"command", "evaluate"},
                            {"model_file", args.model_file},
                            {"evaluation", "on the given logs (held-out if the model was not fitted on them)"}};

@@ -49,9 +49,14 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     options.svr.epsilon = args.epsilon;
     options.svr.tolerance = args.tolerance;
   }
-  const LogSpec spec = args.data.spec();
-  const auto logs = args.data.read(spec);
-  const Calibration calibration = calibrate(logs, spec, options);
+  Calibration calibration;
+  if (args.data.format == "libsvm") {
+    if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
+    calibration = calibrate_libsvm(read_libsvm(args.data.files.front()), args.data.files.front(), options);
+  } else {
+    const LogSpec spec = args.data.spec();
+    calibration = calibrate(args.data.read(spec), spec, options);
+  }
   save_drift_model(calibration.model, args.out, args.data.files);
 
   nlohmann::json result = {{"command", "fit"}, {"model_file", args.out}, {"evaluation", "in-sample"}};

@@ -1,9 +1,16 @@
 #include "thermodrift/compensate/compensator.hpp"
 
+#include "thermodrift/error.hpp"
+
 namespace thermodrift {
 
 Compensator::Compensator(DriftModel model)
     : model_(std::move(model)), drift_(model_.axes.size()), compensated_(model_.axes.size()) {
+  for (const auto& axis : model_.axes) {
+    if (axis.pipeline.libsvm) {
+      throw UsageError("a model fitted on libsvm-format data has no chamber-log pipeline to compensate with");
+    }
+  }
   streams_.reserve(model_.axes.size());
   for (const auto& axis : model_.axes) streams_.emplace_back(axis.pipeline);
   output_.drift = drift_;

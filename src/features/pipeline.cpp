@@ -12,6 +12,10 @@ namespace thermodrift {
 FeatureTerm FeatureTerm::parse(const std::string& text) {
   if (text == "dT") return {Kind::delta_t};
   if (text == "rate") return {Kind::rate};
+  if (text.size() > 1 && text[0] == 'x' && text.find_first_not_of("0123456789", 1) == std::string::npos) {
+    const auto column = std::stoul(text.substr(1));
+    if (column >= 1 && column <= 100000) return {Kind::input, column - 1};
+  }
   throw UsageError(fmt::format("unknown feature term '{}' (known: dT, rate)", text));
 }
 
@@ -19,6 +23,7 @@ std::string FeatureTerm::name() const {
   switch (kind) {
     case Kind::delta_t: return "dT";
     case Kind::rate: return "rate";
+    case Kind::input: return fmt::format("x{}", input_index + 1);
   }
   return "?";
 }
@@ -49,7 +54,17 @@ void Pipeline::validate() const {
   if (terms.empty()) throw UsageError("a pipeline needs at least one feature term");
 }
 
+Pipeline Pipeline::libsvm_input(std::size_t columns) {
+  Pipeline pipeline;
+  pipeline.libsvm = true;
+  pipeline.smooth_seconds = 0;
+  pipeline.terms.clear();
+  for (std::size_t j = 0; j < columns; ++j) pipeline.terms.push_back({FeatureTerm::Kind::input, j});
+  return pipeline;
+}
+
 nlohmann::json Pipeline::to_json() const {
+  if (libsvm) return {{"version", kVersion}, {"input", "libsvm"}, {"terms", term_names()}};
   return {{"version", kVersion},
           {"smooth_seconds", smooth_seconds},
           {"window", "trailing"},
@@ -64,6 +79,13 @@ Pipeline Pipeline::from_json(const nlohmann::json& json) {
   if (json.at("version").get<int>() != kVersion) {
     throw Error(fmt::format("pipeline version {} is not supported (expected {})",
                             json.at("version").dump(), kVersion));
+  }
+  if (json.value("input", "chamber_log") == "libsvm") {
+    Pipeline pipeline = libsvm_input(json.at("terms").size());
+    if (pipeline.term_names() != json.at("terms").get<std::vector<std::string>>()) {
+      throw Error("libsvm pipeline terms must be x1..xN");
+    }
+    return pipeline;
   }
   if (json.at("window").get<std::string>() != "trailing") {
     throw Error("pipeline window must be \"trailing\"");
@@ -137,6 +159,9 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
         break;
       case FeatureTerm::Kind::rate:
         features_[i] = rate_per_minute;
+        break;
+      case FeatureTerm::Kind::input:  // libsvm models never stream (Compensator refuses them)
+        features_[i] = 0;
         break;
     }
   }

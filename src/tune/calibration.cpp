@@ -83,6 +83,95 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
 
 }  // namespace
 
+std::size_t minimum_samples(const std::string& model, std::size_t terms) {
+  if (model == "linear") return terms + 2;
+  if (model == "stepwise") return 2 * terms + 4;
+  return 3;
+}
+
+FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
+                      const std::vector<std::string>& terms, const CalibrationOptions& options,
+                      bool standardize) {
+  FittedModel fitted;
+  fitted.fit = {{"terms", terms}};
+  if (options.model == "linear") {
+    fitted.model = fit_least_squares(features, target, linear_regressors(terms.size()));
+  } else if (options.model == "stepwise") {
+    auto stepwise = fit_stepwise(features, target, quadratic_regressors(terms.size()), terms);
+    nlohmann::json path = nlohmann::json::array();
+    for (const auto& step : stepwise.path) {
+      path.push_back({{"action", step.action}, {"regressor", step.regressor}, {"F", step.f_statistic}});
+    }
+    fitted.fit["stepwise_path"] = path;
+    fitted.model = std::move(stepwise.model);
+  } else if (options.model == "svr") {
+    SvrModel svr;
+    svr.scaling = standardize ? Standardization::of(features, target)
+                              : Standardization::identity(features.cols());
+    const SvrTrainer trainer(options.svr);
+    const SvrFit result = trainer.train(svr.scaling.features(features), svr.scaling.target(target));
+    svr.function = result.function;
+    svr.C = options.svr.C;
+    svr.epsilon = options.svr.epsilon;
+    svr.converged = result.summary.termination == SvrTermination::converged;
+    fitted.fit["params"] = {{"C", svr.C}, {"sigma", svr.sigma()}, {"gamma", svr.function.gamma}, {"epsilon", svr.epsilon}};
+    fitted.fit["standardized"] = standardize;
+    fitted.fit["solver"] = {{"termination", to_string(result.summary.termination)},
+                            {"iterations", result.summary.iterations},
+                            {"support_vectors", result.summary.support_vectors},
+                            {"dual_objective", result.summary.dual_objective}};
+    fitted.fit["evaluations"] = 1;
+    fitted.model = std::move(svr);
+  } else {
+    throw UsageError(fmt::format("unknown model '{}' (expected linear, stepwise or svr)", options.model));
+  }
+  return fitted;
+}
+
+Calibration calibrate_libsvm(const LabelledData& data, const std::string& source,
+                             const CalibrationOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto columns = static_cast<std::size_t>(data.samples.cols());
+  if (static_cast<std::size_t>(data.samples.rows()) < minimum_samples(options.model, columns)) {
+    throw DataError(source, 0, 0, fmt::format("{} samples are too few for a {} model", data.samples.rows(), options.model));
+  }
+  AxisModel axis;
+  axis.name = "label";
+  axis.gyro_column = "label";
+  axis.temperature_column = "";
+  axis.pipeline = Pipeline::libsvm_input(columns);
+  axis.kind = options.model;
+  FittedModel fitted = fit_model(data.samples, data.targets, axis.pipeline.term_names(), options, false);
+  axis.model = std::move(fitted.model);
+  AxisCalibration report;
+  report.in_sample = residual_metrics(data.targets, axis.predict(data.samples));
+  report.training_samples = static_cast<std::size_t>(data.samples.rows());
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  fitted.fit["training_samples"] = report.training_samples;
+  fitted.fit["in_sample"] = report.in_sample.to_json();
+  fitted.fit["seconds"] = report.seconds;
+  axis.fit = std::move(fitted.fit);
+  Calibration calibration;
+  calibration.model.axes.push_back(std::move(axis));
+  calibration.axes.push_back(report);
+  return calibration;
+}
+
+ResidualMetrics evaluate_libsvm(const DriftModel& model, const LabelledData& data, const std::string& source) {
+  if (model.axes.size() != 1 || !model.axes.front().pipeline.libsvm) {
+    throw UsageError("--format libsvm needs a model fitted with --format libsvm");
+  }
+  const auto& axis = model.axes.front();
+  if (static_cast<std::size_t>(data.samples.cols()) > axis.pipeline.terms.size()) {
+    throw DataError(source, 0, 0, fmt::format("the data has {} features, the model {}", data.samples.cols(),
+                                              axis.pipeline.terms.size()));
+  }
+  // libsvm's sparse format omits trailing zero features: pad to the model's width.
+  Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(data.samples.rows(), static_cast<Eigen::Index>(axis.pipeline.terms.size()));
+  samples.leftCols(data.samples.cols()) = data.samples;
+  return residual_metrics(data.targets, axis.predict(samples));
+}
+
 Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                       const CalibrationOptions& options) {
   if (logs.empty()) throw UsageError("no log to calibrate on");
@@ -113,46 +202,10 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     const auto& pipeline = axis_model.pipeline;
 
     const FeatureTable training = feature_table(logs, pipeline, axis, true);
-    const auto terms = pipeline.term_names();
-    nlohmann::json fit = {{"terms", terms}};
-    if (options.model == "linear") {
-      require_samples(training, pipeline, logs, pipeline.terms.size() + 2);
-      axis_model.model = fit_least_squares(training.features, training.target,
-                                           linear_regressors(pipeline.terms.size()));
-    } else if (options.model == "stepwise") {
-      require_samples(training, pipeline, logs, 2 * pipeline.terms.size() + 4);
-      auto stepwise = fit_stepwise(training.features, training.target,
-                                   quadratic_regressors(pipeline.terms.size()), terms);
-      nlohmann::json path = nlohmann::json::array();
-      for (const auto& step : stepwise.path) {
-        path.push_back({{"action", step.action}, {"regressor", step.regressor}, {"F", step.f_statistic}});
-      }
-      fit["stepwise_path"] = path;
-      axis_model.model = std::move(stepwise.model);
-    } else if (options.model == "svr") {
-      require_samples(training, pipeline, logs, 3);
-      SvrModel svr;
-      svr.scaling = Standardization::of(training.features, training.target);
-      const SvrTrainer trainer(options.svr);
-      const SvrFit result = trainer.train(svr.scaling.features(training.features),
-                                          svr.scaling.target(training.target));
-      svr.function = result.function;
-      svr.C = options.svr.C;
-      svr.epsilon = options.svr.epsilon;
-      svr.converged = result.summary.termination == SvrTermination::converged;
-      fit["params"] = {{"C", svr.C},
-                       {"sigma", svr.sigma()},
-                       {"gamma", svr.function.gamma},
-                       {"epsilon", svr.epsilon}};
-      fit["solver"] = {{"termination", to_string(result.summary.termination)},
-                       {"iterations", result.summary.iterations},
-                       {"support_vectors", result.summary.support_vectors},
-                       {"dual_objective", result.summary.dual_objective}};
-      fit["evaluations"] = 1;
-      axis_model.model = std::move(svr);
-    } else {
-      throw UsageError(fmt::format("unknown model '{}' (expected linear, stepwise or svr)", options.model));
-    }
+    require_samples(training, pipeline, logs, minimum_samples(options.model, pipeline.terms.size()));
+    FittedModel fitted = fit_model(training.features, training.target, pipeline.term_names(), options, true);
+    axis_model.model = std::move(fitted.model);
+    nlohmann::json fit = std::move(fitted.fit);
 
     AxisCalibration report;
     const FeatureTable every = feature_table(logs, pipeline, axis, false);

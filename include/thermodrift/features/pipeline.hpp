@@ -22,8 +22,10 @@ struct FeatureTerm {
   enum class Kind {
     delta_t,  // "dT":   T_s - reference temperature, °C
     rate,     // "rate": (T_s(t) - T_s(t - rate_span)) / rate_span, °C/min
+    input,    // "xN": column N (1-based) of libsvm-format data, used as given
   };
   Kind kind = Kind::delta_t;
+  std::size_t input_index = 0;  // 0-based column, for Kind::input
 
   static FeatureTerm parse(const std::string& text);  // UsageError on an unknown term
   std::string name() const;
@@ -38,6 +40,11 @@ struct Pipeline {
   double reference_temperature = 0; // ΔT = T_s - reference, °C; set from the training log
   std::vector<FeatureTerm> terms{FeatureTerm{FeatureTerm::Kind::delta_t},
                                  FeatureTerm{FeatureTerm::Kind::rate}};
+
+  bool libsvm = false;              // features are libsvm-format columns as given: no smoothing, no log
+
+  // The pipeline of a model fitted on libsvm-format data with `columns` features.
+  static Pipeline libsvm_input(std::size_t columns);
 
   // Seconds of history a sample needs before its features are ready.
   double warm_up_seconds() const { return smooth_seconds + rate_span_seconds; }

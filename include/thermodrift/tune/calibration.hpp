@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/io/libsvm_reader.hpp"
 #include "thermodrift/models/metrics.hpp"
 #include "thermodrift/models/model_file.hpp"
 #include "thermodrift/models/svr.hpp"
@@ -44,6 +45,23 @@ struct Calibration {
 // smoothing across files). `spec` is how the logs were read; it is stored in the model.
 Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                       const CalibrationOptions& options);
+
+// One model of kind options.model fitted to (features, target); `fit` describes how.
+// SVR features and target are standardized inside the model when `standardize`.
+struct FittedModel {
+  std::variant<LinearModel, SvrModel> model;
+  nlohmann::json fit;
+};
+FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
+                      const std::vector<std::string>& terms, const CalibrationOptions& options,
+                      bool standardize);
+std::size_t minimum_samples(const std::string& model, std::size_t terms);
+
+// libsvm-format data is used exactly as given: no smoothing, no pipeline, no scaling, so
+// the result compares number for number with libsvm's svm-train (one axis, "label").
+Calibration calibrate_libsvm(const LabelledData& data, const std::string& source,
+                             const CalibrationOptions& options);
+ResidualMetrics evaluate_libsvm(const DriftModel& model, const LabelledData& data, const std::string& source);
 
 // The pipeline's ready samples of one axis of several logs, in order.
 FeatureTable feature_table(const std::vector<ChamberLog>& logs, const Pipeline& pipeline,
