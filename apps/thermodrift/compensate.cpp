@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "data_options.hpp"
+#include "interrupt.hpp"
 #include "thermodrift/compensate/compensator.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
@@ -49,6 +50,7 @@ int run_compensate(const CompensateArguments& args) {
   std::size_t row_index = 0;
   std::string line;
   while (auto row = reader.next()) {
+    if ((row_index & 0xFFF) == 0) throw_if_interrupted();
     if (!read_sample(reader, *row, columns, spec, row_index, previous_time, sample)) continue;
     previous_time = sample.time;
     ++row_index;

@@ -7,6 +7,7 @@
 #include <exception>
 
 #include "commands.hpp"
+#include "interrupt.hpp"
 #include "thermodrift/error.hpp"
 
 int main(int argc, char** argv) {
@@ -27,8 +28,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "thermodrift: %s\n", e.what());
     return static_cast<int>(ExitStatus::usage);
   }
+  thermodrift::cli::install_interrupt_handler();
   try {
     return thermodrift::cli::run_selected(commands);
+  } catch (const thermodrift::Interrupted& e) {
+    std::fprintf(stderr, "thermodrift: %s\n", e.what());
+    return static_cast<int>(ExitStatus::interrupted);
   } catch (const thermodrift::UsageError& e) {
     std::fprintf(stderr, "thermodrift: %s\n", e.what());
     return static_cast<int>(ExitStatus::usage);

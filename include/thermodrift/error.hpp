@@ -20,6 +20,12 @@ class UsageError : public Error {
   using Error::Error;
 };
 
+// The user or a callback asked to stop (Ctrl-C). Outputs in progress are discarded.
+class Interrupted : public Error {
+ public:
+  using Error::Error;
+};
+
 // The input data (a log, a libsvm file, a model file) is malformed. Carries where:
 // `line` and `column` are 1-based, 0 when they do not apply. what() is the whole
 // one-line message, "FILE:LINE:COLUMN: what was wrong".
