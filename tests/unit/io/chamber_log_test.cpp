@@ -1,0 +1,365 @@
+// Reading whole chamber logs: columns by name and index, units, the real BMI270 logs, and
+// every data error with its line and column.
+#include "thermodrift/io/chamber_log.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "../../support/temp_dir.hpp"
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+namespace {
+
+using testing::TempDir;
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+LogSpec named_spec() {
+  LogSpec spec;
+  spec.time_column = "time_s";
+  spec.gyro_columns = {"gyro_x"};
+  spec.temperature_columns = {"temp"};
+  return spec;
+}
+
+// The DataError reading `path` with `spec` throws; fails the test if none.
+DataError log_error(const std::string& path, const LogSpec& spec) {
+  try {
+    read_chamber_log(path, spec);
+  } catch (const DataError& error) {
+    return error;
+  }
+  ADD_FAILURE() << "no DataError reading " << path;
+  return DataError("", 0, 0, "");
+}
+
+const std::string kHeader = "time_s,temp,gyro_x\n";
+
+TEST(ChamberLog, ColumnsByName) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "time_s,temp,gyro_x,gyro_y\n0,20,1.5,9\n0.5,21,2.5,9\n");
+  const ChamberLog log = read_chamber_log(path, named_spec());
+  ASSERT_EQ(log.rows(), 2u);
+  ASSERT_EQ(log.axes(), 1u);
+  EXPECT_EQ(log.time, (std::vector<double>{0, 0.5}));
+  EXPECT_EQ(log.gyro[0], (std::vector<double>{1.5, 2.5}));
+  EXPECT_EQ(log.temperature[0], (std::vector<double>{20, 21}));
+  EXPECT_EQ(log.gyro_names, (std::vector<std::string>{"gyro_x"}));
+  EXPECT_EQ(log.temperature_names, (std::vector<std::string>{"temp"}));
+  EXPECT_EQ(log.line, (std::vector<std::size_t>{2, 3}));
+  EXPECT_EQ(log.source, path);
+}
+
+TEST(ChamberLog, ColumnsByOneBasedIndexWithoutHeader) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "20,0,1.5,7\n21,1,2.5,8\n22,2,3.5,9\n");
+  LogSpec spec;
+  spec.time_column = "2";
+  spec.gyro_columns = {"4", "3"};
+  spec.temperature_columns = {"1"};
+  const ChamberLog log = read_chamber_log(path, spec);
+  ASSERT_EQ(log.rows(), 3u);
+  EXPECT_EQ(log.time, (std::vector<double>{0, 1, 2}));
+  EXPECT_EQ(log.gyro[0], (std::vector<double>{7, 8, 9}));
+  EXPECT_EQ(log.gyro[1], (std::vector<double>{1.5, 2.5, 3.5}));
+  EXPECT_EQ(log.temperature[0], (std::vector<double>{20, 21, 22}));
+  EXPECT_EQ(log.gyro_names, (std::vector<std::string>{"column 4", "column 3"}));
+}
+
+TEST(ChamberLog, ColumnsByIndexWithHeaderAndDefaultsByPrefix) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "time_s,temp_a,temp_b,gyro_x,gyro_y\n0,1,2,3,4\n1,1,2,3,4\n");
+  LogSpec spec;
+  spec.gyro_columns = {"5"};
+  spec.temperature_columns = {"3"};
+  const ChamberLog by_index = read_chamber_log(path, spec);
+  EXPECT_EQ(by_index.gyro[0][0], 4);
+  EXPECT_EQ(by_index.temperature[0][0], 2);
+  EXPECT_EQ(by_index.gyro_names, (std::vector<std::string>{"gyro_y"}));
+
+  const ChamberLog defaults = read_chamber_log(path, LogSpec{});  // time_s, gyro*, temp*
+  EXPECT_EQ(defaults.axes(), 2u);
+  EXPECT_EQ(defaults.temperature.size(), 2u);
+  EXPECT_EQ(defaults.time, (std::vector<double>{0, 1}));
+}
+
+TEST(ChamberLog, RateGivesTimeWithoutATimeColumn) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "20,1\n20,2\n20,3\n20,4\n");
+  LogSpec spec;
+  spec.rate_hz = 50;
+  spec.gyro_columns = {"2"};
+  spec.temperature_columns = {"1"};
+  const ChamberLog log = read_chamber_log(path, spec);
+  ASSERT_EQ(log.rows(), 4u);
+  EXPECT_DOUBLE_EQ(log.time[3], 3.0 / 50.0);
+}
+
+TEST(ChamberLog, GyroUnitsBecomeDegreesPerHour) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", kHeader + "0,20,1\n1,20,-0.5\n");
+  LogSpec spec = named_spec();
+  spec.gyro_unit = GyroUnit::dph;
+  EXPECT_EQ(read_chamber_log(path, spec).gyro[0], (std::vector<double>{1, -0.5}));
+  spec.gyro_unit = GyroUnit::dps;
+  EXPECT_EQ(read_chamber_log(path, spec).gyro[0], (std::vector<double>{3600, -1800}));
+  spec.gyro_unit = GyroUnit::radps;
+  const auto radps = read_chamber_log(path, spec).gyro[0];
+  EXPECT_NEAR(radps[0], 3600.0 * 180.0 / std::numbers::pi, 1e-6);
+  EXPECT_NEAR(radps[0], 206264.806247, 1e-5);  // °/h in one rad/s
+  EXPECT_NEAR(radps[1], -0.5 * 206264.806247, 1e-5);
+  EXPECT_EQ(parse_gyro_unit("dps"), GyroUnit::dps);
+  EXPECT_THROW(parse_gyro_unit("deg/s"), UsageError);
+}
+
+// --- every data error with its line and column ---
+
+TEST(ChamberLogErrors, NonNumericCellInASmallFile) {
+  TempDir dir;
+  const auto path = dir.write("bad.csv", kHeader + "0,20,1\n1,20,x1.5\n2,20,1\n");
+  const auto error = log_error(path, named_spec());
+  EXPECT_EQ(error.line(), 3u);
+  EXPECT_EQ(error.column(), 3u);
+  EXPECT_EQ(error.file(), path);
+  EXPECT_TRUE(contains(error.what(), "bad.csv:3:3: 'x1.5' is not a number")) << error.what();
+}
+
+TEST(ChamberLogErrors, NonNumericCellInStrictModeEvenInALongFile) {
+  TempDir dir;
+  std::string text = kHeader;
+  for (int i = 0; i < 3000; ++i) text += std::to_string(i) + (i == 2000 ? ",2O,1\n" : ",20,1\n");
+  const auto path = dir.write("strict.csv", text);
+  LogSpec spec = named_spec();
+  spec.csv = CsvOptions{.garbled_per_thousand = 0};
+  const auto error = log_error(path, spec);
+  EXPECT_EQ(error.line(), 2002u);
+  EXPECT_EQ(error.column(), 2u);
+  EXPECT_TRUE(contains(error.message(), "'2O' is not a number")) << error.what();
+  // The default tolerance drops the same row instead.
+  EXPECT_EQ(read_chamber_log(path, named_spec()).rows(), 2999u);
+}
+
+TEST(ChamberLogErrors, EmptyCell) {
+  TempDir dir;
+  const auto path = dir.write("empty_cell.csv", kHeader + "0,20,1\n1,,1\n2,20,1\n");
+  const auto error = log_error(path, named_spec());
+  EXPECT_EQ(error.line(), 3u);
+  EXPECT_EQ(error.column(), 2u);
+  EXPECT_TRUE(contains(error.message(), "empty cell")) << error.what();
+}
+
+TEST(ChamberLogErrors, NaNIsAlwaysAnError) {
+  TempDir dir;
+  std::string text = kHeader;
+  for (int i = 0; i < 3000; ++i) text += std::to_string(i) + (i == 10 ? ",20,NaN\n" : ",20,1\n");
+  const auto error = log_error(dir.write("nan.csv", text), named_spec());
+  EXPECT_EQ(error.line(), 12u);
+  EXPECT_EQ(error.column(), 3u);
+  EXPECT_TRUE(contains(error.message(), "not a finite number")) << error.what();
+}
+
+TEST(ChamberLogErrors, InfIsAlwaysAnError) {
+  TempDir dir;
+  std::string text = kHeader;
+  for (int i = 0; i < 3000; ++i) text += std::to_string(i) + (i == 2500 ? ",-inf,1\n" : ",20,1\n");
+  const auto error = log_error(dir.write("inf.csv", text), named_spec());
+  EXPECT_EQ(error.line(), 2502u);
+  EXPECT_EQ(error.column(), 2u);
+  EXPECT_TRUE(contains(error.message(), "'-inf' is not a finite number")) << error.what();
+}
+
+TEST(ChamberLogErrors, NumberOutOfRangeIsAnError) {
+  TempDir dir;
+  const auto error = log_error(dir.write("huge.csv", kHeader + "0,20,1\n1,20,1e999\n"), named_spec());
+  EXPECT_EQ(error.line(), 3u);
+  EXPECT_EQ(error.column(), 3u);
+}
+
+TEST(ChamberLogErrors, TimeGoingBackwards) {
+  TempDir dir;
+  std::string text = kHeader;
+  for (int i = 0; i < 3000; ++i) text += std::to_string(i == 1200 ? 1100 : i) + ",20,1\n";
+  const auto error = log_error(dir.write("back.csv", text), named_spec());
+  EXPECT_EQ(error.line(), 1202u);
+  EXPECT_EQ(error.column(), 1u);
+  EXPECT_TRUE(contains(error.message(), "time goes backwards (1100 after 1199)")) << error.what();
+  EXPECT_TRUE(contains(error.what(), "back.csv:1202:1: ")) << error.what();
+}
+
+TEST(ChamberLogErrors, TimeRepeated) {
+  TempDir dir;
+  const auto path = dir.write("repeat.csv", "temp,gyro_x,time_s\n20,1,0\n20,1,1\n20,1,1\n20,1,2\n");
+  const auto error = log_error(path, named_spec());
+  EXPECT_EQ(error.line(), 4u);
+  EXPECT_EQ(error.column(), 3u);
+  EXPECT_TRUE(contains(error.message(), "repeats")) << error.what();
+}
+
+TEST(ChamberLogErrors, ShortRowInsideTheData) {
+  TempDir dir;
+  const auto error = log_error(dir.write("short.csv", kHeader + "0,20,1\n1,20\n2,20,1\n3,20,1\n"), named_spec());
+  EXPECT_EQ(error.line(), 3u);
+  EXPECT_EQ(error.column(), 3u);
+  EXPECT_TRUE(contains(error.message(), "row has 2 fields, expected 3")) << error.what();
+}
+
+TEST(ChamberLogErrors, LongRowInsideTheData) {
+  TempDir dir;
+  const auto error = log_error(dir.write("long.csv", kHeader + "0,20,1\n1,20,1,5\n2,20,1\n"), named_spec());
+  EXPECT_EQ(error.line(), 3u);
+  EXPECT_EQ(error.column(), 4u);
+}
+
+TEST(ChamberLogErrors, EmptyFileAndOnlyHeader) {
+  TempDir dir;
+  const auto empty = log_error(dir.write("empty.csv", ""), named_spec());
+  EXPECT_EQ(empty.line(), 0u);
+  EXPECT_TRUE(contains(empty.message(), "no data rows"));
+  const auto header = log_error(dir.write("header.csv", kHeader), named_spec());
+  EXPECT_EQ(header.line(), 1u);
+  EXPECT_EQ(header.column(), 0u);
+  EXPECT_TRUE(contains(header.message(), "only a header"));
+}
+
+TEST(ChamberLogErrors, MissingColumnNameNamesTheHeaderLine) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "# banner\n" + kHeader + "0,20,1\n");
+  LogSpec spec = named_spec();
+  spec.gyro_columns = {"gyro_q"};
+  const auto error = log_error(path, spec);
+  EXPECT_EQ(error.line(), 2u);
+  EXPECT_EQ(error.column(), 0u);
+  EXPECT_TRUE(contains(error.message(), "no gyro column named 'gyro_q'")) << error.what();
+  EXPECT_TRUE(contains(error.message(), "time_s, temp, gyro_x")) << error.what();
+
+  spec = named_spec();
+  spec.time_column = "seconds";
+  EXPECT_TRUE(contains(log_error(path, spec).message(), "no time column named 'seconds'"));
+}
+
+TEST(ChamberLogErrors, ColumnIndexOutOfRange) {
+  TempDir dir;
+  const auto with_header = dir.write("h.csv", kHeader + "0,20,1\n");
+  LogSpec spec = named_spec();
+  spec.temperature_columns = {"4"};
+  auto error = log_error(with_header, spec);
+  EXPECT_EQ(error.line(), 1u);
+  EXPECT_EQ(error.column(), 0u);
+  EXPECT_TRUE(contains(error.message(), "temperature column 4 is out of range: the file has 3 columns"))
+      << error.what();
+
+  const auto without_header = dir.write("n.csv", "0,20,1\n1,20,1\n");
+  spec.time_column = "1";
+  spec.gyro_columns = {"0"};
+  spec.temperature_columns = {"2"};
+  error = log_error(without_header, spec);
+  EXPECT_EQ(error.line(), 0u);
+  EXPECT_TRUE(contains(error.message(), "gyro column 0 is out of range")) << error.what();
+}
+
+TEST(ChamberLogErrors, NameWithoutHeaderRow) {
+  TempDir dir;
+  const auto error = log_error(dir.write("n.csv", "0,20,1\n1,20,1\n"), named_spec());
+  EXPECT_TRUE(contains(error.message(), "no header row")) << error.what();
+}
+
+TEST(ChamberLog, RareGarbledRowInALongLogIsDroppedAndItsNeighboursKept) {
+  TempDir dir;
+  std::string text = kHeader;
+  for (int i = 0; i < 2000; ++i) text += std::to_string(i) + (i == 1234 ? ",20,-0.3-0.31\n" : ",20,1\n");
+  const auto path = dir.write("rare.csv", text);
+  const ChamberLog log = read_chamber_log(path, named_spec());
+  ASSERT_EQ(log.rows(), 1999u);
+  EXPECT_EQ(log.time[1233], 1233);
+  EXPECT_EQ(log.time[1234], 1235);
+  EXPECT_EQ(log.line[1233], 1235u);
+  EXPECT_EQ(log.line[1234], 1237u);
+  ASSERT_EQ(log.warnings.size(), 1u);
+  EXPECT_TRUE(contains(log.warnings[0], "rare.csv:1236:3: '-0.3-0.31' is not a number; garbled row dropped"))
+      << log.warnings[0];
+}
+
+// --- the real BMI270 logs ---
+
+LogSpec bmi270_spec() {
+  LogSpec spec;
+  spec.rate_hz = 50;
+  spec.temperature_columns = {"1"};
+  spec.gyro_columns = {"5", "6", "7"};
+  spec.gyro_unit = GyroUnit::dps;
+  return spec;
+}
+
+std::string bmi270(const std::string& name) { return std::string(THERMODRIFT_SHARED_DATA) + "/real/bmi270/" + name; }
+
+bool any_warning(const ChamberLog& log, const std::string& part) {
+  for (const auto& warning : log.warnings) {
+    if (contains(warning, part)) return true;
+  }
+  return false;
+}
+
+TEST(Bmi270, ColdLogLoadsWithBannerGarbledRowAndCutShortLastRow) {
+  const ChamberLog log = read_chamber_log(bmi270("cold.csv"), bmi270_spec());
+  // 3258 lines: banner, 3255 rows, "-0.3-0.31" on line 9, a lone "1" at the end.
+  EXPECT_EQ(log.rows(), 3255u);
+  EXPECT_EQ(log.axes(), 3u);
+  EXPECT_EQ(log.line.front(), 2u);
+  EXPECT_DOUBLE_EQ(log.time[1], 0.02);
+  EXPECT_DOUBLE_EQ(log.temperature[0][0], 13.255859);
+  EXPECT_DOUBLE_EQ(log.gyro[0][0], -0.12 * 3600);  // first row, column 5, °/s -> °/h
+  EXPECT_TRUE(any_warning(log, "skipped 1 banner/comment line")) << ::testing::PrintToString(log.warnings);
+  EXPECT_TRUE(any_warning(log, "cold.csv:9:6: '-0.3-0.31' is not a number; garbled row dropped"))
+      << ::testing::PrintToString(log.warnings);
+  EXPECT_TRUE(any_warning(log, "line 3258: last row cut short (1 of 7 fields)"))
+      << ::testing::PrintToString(log.warnings);
+  for (double t : log.temperature[0]) {
+    ASSERT_GT(t, 12.5);
+    ASSERT_LT(t, 13.8);
+  }
+}
+
+TEST(Bmi270, HotLogLoadsWithBannerCutShortFirstAndLastRowsAndAGarbledRow) {
+  const ChamberLog log = read_chamber_log(bmi270("hot.csv"), bmi270_spec());
+  // 6537 lines: banner, a 6-field first row, an 8-field row on line 13, a lone "4" at the end.
+  EXPECT_EQ(log.rows(), 6533u);
+  EXPECT_EQ(log.line.front(), 3u);
+  EXPECT_DOUBLE_EQ(log.temperature[0][0], 49.353516);
+  EXPECT_TRUE(any_warning(log, "skipped 1 banner/comment line")) << ::testing::PrintToString(log.warnings);
+  EXPECT_TRUE(any_warning(log, "line 2: first row cut short (6 of 7 fields), dropped"))
+      << ::testing::PrintToString(log.warnings);
+  EXPECT_TRUE(any_warning(log, "hot.csv:13:8: row has 8 fields, expected 7; garbled row dropped"))
+      << ::testing::PrintToString(log.warnings);
+  EXPECT_TRUE(any_warning(log, "line 6537: last row cut short (1 of 7 fields)"))
+      << ::testing::PrintToString(log.warnings);
+  EXPECT_NEAR(log.time.back(), 6532 / 50.0, 1e-9);
+  for (double t : log.temperature[0]) {
+    ASSERT_GT(t, 46.5);
+    ASSERT_LT(t, 50.0);
+  }
+}
+
+TEST(Bmi270, StrictReadingRefusesTheGarbledRow) {
+  LogSpec spec = bmi270_spec();
+  spec.csv.garbled_per_thousand = 0;
+  const auto error = log_error(bmi270("cold.csv"), spec);
+  EXPECT_EQ(error.line(), 9u);
+  EXPECT_EQ(error.column(), 6u);
+}
+
+TEST(SliceRows, KeepsTheRowsAsked) {
+  TempDir dir;
+  const auto log = read_chamber_log(dir.write("log.csv", kHeader + "0,20,1\n1,21,2\n2,22,3\n3,23,4\n"), named_spec());
+  const auto part = slice_rows(log, 1, 3);
+  EXPECT_EQ(part.time, (std::vector<double>{1, 2}));
+  EXPECT_EQ(part.gyro[0], (std::vector<double>{2, 3}));
+  EXPECT_EQ(part.temperature[0], (std::vector<double>{21, 22}));
+  EXPECT_EQ(part.line, (std::vector<std::size_t>{3, 4}));
+}
+
+}  // namespace
+}  // namespace thermodrift
