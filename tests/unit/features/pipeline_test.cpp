@@ -1,0 +1,260 @@
+// The feature pipeline: ΔT and rate on known temperature histories, warm-up, gaps,
+// decimation, and the pipeline as JSON.
+#include "thermodrift/features/pipeline.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+namespace {
+
+Pipeline ramp_pipeline() {
+  Pipeline pipeline;
+  pipeline.smooth_seconds = 10;
+  pipeline.rate_span_seconds = 20;
+  pipeline.gap_seconds = 5;
+  pipeline.reference_temperature = 25;
+  pipeline.terms = {FeatureTerm{FeatureTerm::Kind::delta_t}, FeatureTerm{FeatureTerm::Kind::rate}};
+  return pipeline;
+}
+
+// A log of one axis from explicit samples.
+ChamberLog make_log(const std::vector<double>& time, const std::vector<double>& gyro,
+                    const std::vector<double>& temperature) {
+  ChamberLog log;
+  log.source = "memory";
+  log.time = time;
+  log.gyro_names = {"gyro_x"};
+  log.gyro = {gyro};
+  log.temperature_names = {"temp"};
+  log.temperature = {temperature};
+  for (std::size_t i = 0; i < time.size(); ++i) log.line.push_back(i + 2);
+  return log;
+}
+
+TEST(FeatureStream, RateOfALinearRampIsItsSlopeInDegreesPerMinute) {
+  const Pipeline pipeline = ramp_pipeline();
+  FeatureStream stream(pipeline);
+  const double slope = 0.05;  // °C/s = 3 °C/min
+  const double dt = 0.5;
+  const double start = 1000;
+  std::size_t ready = 0;
+  for (int k = 0; k < 400; ++k) {
+    const double t = start + k * dt;
+    const double temperature = 20 + slope * (t - start);
+    const auto& sample = stream.push(t, 7.0, temperature);
+    if (!sample.ready) continue;
+    ++ready;
+    ASSERT_EQ(sample.features.size(), 2u);
+    EXPECT_NEAR(sample.features[1], 3.0, 1e-9) << "t = " << t;
+    // The trailing mean of 20 samples lags the ramp by 19·dt/2 = 4.75 s.
+    EXPECT_NEAR(sample.smoothed_temperature, 20 + slope * (t - start - 4.75), 1e-9);
+    EXPECT_NEAR(sample.features[0], sample.smoothed_temperature - 25.0, 1e-12);
+    EXPECT_NEAR(sample.smoothed_gyro, 7.0, 1e-12);
+  }
+  EXPECT_EQ(ready, 400u - 60u);  // ready from 30 s = smooth + span on
+}
+
+TEST(FeatureStream, FallingRampGivesNegativeRate) {
+  Pipeline pipeline = ramp_pipeline();
+  pipeline.terms = {FeatureTerm{FeatureTerm::Kind::rate}};
+  FeatureStream stream(pipeline);
+  double last = 0;
+  for (int k = 0; k < 200; ++k) {
+    const auto& sample = stream.push(k, 0, 60 - 0.02 * k);  // -1.2 °C/min
+    if (sample.ready) last = sample.features[0];
+  }
+  EXPECT_NEAR(last, -1.2, 1e-9);
+}
+
+TEST(FeatureStream, ReadyAfterSmoothingPlusRateSpanSeconds) {
+  const Pipeline pipeline = ramp_pipeline();  // 10 s + 20 s
+  EXPECT_EQ(pipeline.warm_up_seconds(), 30.0);
+  FeatureStream stream(pipeline);
+  for (int k = 0; k <= 40; ++k) {
+    const double t = 500 + k;
+    EXPECT_EQ(stream.push(t, 0, 20).ready, k >= 30) << "t - start = " << k;
+  }
+}
+
+TEST(FeatureStream, GapLongerThanTheThresholdRestartsWarmUp) {
+  const Pipeline pipeline = ramp_pipeline();  // gap threshold 5 s
+  FeatureStream stream(pipeline);
+  for (int k = 0; k <= 40; ++k) stream.push(k, 0, 20);
+  // A 4 s step is within the threshold: still ready.
+  EXPECT_TRUE(stream.push(44, 0, 20).ready);
+  // A 6 s step is a gap: warm-up again from t = 50, and the old samples are forgotten.
+  const auto& after_gap = stream.push(50, 1, 90);
+  EXPECT_FALSE(after_gap.ready);
+  EXPECT_EQ(after_gap.smoothed_temperature, 90.0);
+  EXPECT_EQ(after_gap.smoothed_gyro, 1.0);
+  for (int t = 51; t < 80; ++t) EXPECT_FALSE(stream.push(t, 1, 90).ready) << t;
+  const auto& ready_again = stream.push(80, 1, 90);
+  EXPECT_TRUE(ready_again.ready);
+  EXPECT_NEAR(ready_again.features[1], 0.0, 1e-12);  // no rate across the gap
+}
+
+TEST(FeatureStream, DefaultGapIsTheSmoothingWindowAtLeastTenSeconds) {
+  Pipeline pipeline;
+  pipeline.smooth_seconds = 100;
+  EXPECT_EQ(pipeline.effective_gap_seconds(), 100.0);
+  pipeline.smooth_seconds = 1;
+  EXPECT_EQ(pipeline.effective_gap_seconds(), 10.0);
+  pipeline.gap_seconds = 3;
+  EXPECT_EQ(pipeline.effective_gap_seconds(), 3.0);
+}
+
+TEST(FeatureStream, ResetForgetsHistory) {
+  const Pipeline pipeline = ramp_pipeline();
+  FeatureStream stream(pipeline);
+  for (int k = 0; k <= 40; ++k) stream.push(k, 0, 20);
+  stream.reset();
+  const auto& sample = stream.push(41, 5, 30);
+  EXPECT_FALSE(sample.ready);
+  EXPECT_EQ(sample.smoothed_temperature, 30.0);
+}
+
+TEST(BuildFeatureTable, KeepsOnlyReadySamplesOfTheChosenAxis) {
+  const Pipeline pipeline = ramp_pipeline();
+  std::vector<double> time, gyro, temperature;
+  for (int k = 0; k < 100; ++k) {
+    time.push_back(k);
+    gyro.push_back(2.0);
+    temperature.push_back(20 + 0.1 * k);
+  }
+  const FeatureTable table = build_feature_table(pipeline, make_log(time, gyro, temperature), 0, 0, false);
+  ASSERT_EQ(table.rows(), 70u);  // t = 30 .. 99
+  EXPECT_EQ(table.row.front(), 30u);
+  EXPECT_EQ(table.time.front(), 30.0);
+  EXPECT_EQ(table.features.rows(), 70);
+  EXPECT_EQ(table.features.cols(), 2);
+  EXPECT_EQ(table.target.size(), 70);
+  for (Eigen::Index i = 0; i < table.features.rows(); ++i) {
+    EXPECT_NEAR(table.features(i, 1), 6.0, 1e-9);  // 0.1 °C/s
+    EXPECT_NEAR(table.target(i), 2.0, 1e-12);
+    EXPECT_NEAR(table.features(i, 0), table.temperature[static_cast<std::size_t>(i)] - 25.0, 1e-12);
+  }
+}
+
+TEST(BuildFeatureTable, DecimationKeepsEveryKthReadySampleAndRestartsAfterAGap) {
+  Pipeline pipeline = ramp_pipeline();
+  pipeline.decimation = 3;
+  std::vector<double> time, gyro, temperature;
+  for (int k = 0; k < 100; ++k) time.push_back(k);
+  for (int k = 0; k < 80; ++k) time.push_back(200 + k);  // a gap of 101 s
+  for (std::size_t i = 0; i < time.size(); ++i) {
+    gyro.push_back(std::sin(time[i]));
+    temperature.push_back(20 + 0.01 * time[i] * time[i]);
+  }
+  const ChamberLog log = make_log(time, gyro, temperature);
+  const FeatureTable every = build_feature_table(pipeline, log, 0, 0, false);
+  const FeatureTable kept = build_feature_table(pipeline, log, 0, 0, true);
+  ASSERT_EQ(every.rows(), 70u + 50u);
+
+  // Every third ready sample of each segment, counted from the segment's first ready one.
+  std::vector<std::size_t> expected;
+  for (std::size_t i = 0; i < 70; i += 3) expected.push_back(i);
+  for (std::size_t i = 0; i < 50; i += 3) expected.push_back(70 + i);
+  ASSERT_EQ(kept.rows(), expected.size());
+  for (std::size_t j = 0; j < expected.size(); ++j) {
+    const auto i = expected[j];
+    EXPECT_EQ(kept.row[j], every.row[i]);
+    EXPECT_EQ(kept.time[j], every.time[i]);
+    EXPECT_EQ(kept.target(static_cast<Eigen::Index>(j)), every.target(static_cast<Eigen::Index>(i)));
+    EXPECT_EQ(kept.features.row(static_cast<Eigen::Index>(j)), every.features.row(static_cast<Eigen::Index>(i)));
+  }
+  EXPECT_EQ(kept.time[0], 30.0);
+  EXPECT_EQ(kept.time[24], 230.0);  // the second segment starts over at its first ready sample
+}
+
+TEST(BuildFeatureTable, AppendRowsConcatenates) {
+  const Pipeline pipeline = ramp_pipeline();
+  std::vector<double> time, gyro, temperature;
+  for (int k = 0; k < 50; ++k) {
+    time.push_back(k);
+    gyro.push_back(k);
+    temperature.push_back(20);
+  }
+  const ChamberLog log = make_log(time, gyro, temperature);
+  FeatureTable table;
+  append_rows(table, build_feature_table(pipeline, log, 0, 0, false));
+  append_rows(table, build_feature_table(pipeline, log, 0, 0, false));
+  ASSERT_EQ(table.rows(), 40u);
+  EXPECT_EQ(table.features.rows(), 40);
+  EXPECT_EQ(table.target(20), table.target(0));
+  EXPECT_EQ(table.time[20], 30.0);
+}
+
+TEST(DefaultDecimation, AboutTenSamplesPerWindow) {
+  EXPECT_EQ(default_decimation(100, 1), 10u);
+  EXPECT_EQ(default_decimation(100, 0.02), 500u);
+  EXPECT_EQ(default_decimation(1, 1), 1u);
+  EXPECT_EQ(default_decimation(100, 0), 1u);
+}
+
+TEST(PipelineJson, RoundTripsEveryField) {
+  Pipeline pipeline;
+  pipeline.smooth_seconds = 37.5;
+  pipeline.rate_span_seconds = 12.25;
+  pipeline.gap_seconds = 80;
+  pipeline.decimation = 4;
+  pipeline.reference_temperature = 21.123456789012345;
+  pipeline.terms = {FeatureTerm{FeatureTerm::Kind::rate}, FeatureTerm{FeatureTerm::Kind::delta_t}};
+  const nlohmann::json json = pipeline.to_json();
+  const Pipeline back = Pipeline::from_json(nlohmann::json::parse(json.dump()));
+  EXPECT_EQ(back.smooth_seconds, pipeline.smooth_seconds);
+  EXPECT_EQ(back.rate_span_seconds, pipeline.rate_span_seconds);
+  EXPECT_EQ(back.gap_seconds, pipeline.gap_seconds);
+  EXPECT_EQ(back.decimation, pipeline.decimation);
+  EXPECT_EQ(back.reference_temperature, pipeline.reference_temperature);
+  EXPECT_EQ(back.term_names(), (std::vector<std::string>{"rate", "dT"}));
+  EXPECT_FALSE(back.libsvm);
+  EXPECT_EQ(back.to_json(), json);
+}
+
+TEST(PipelineJson, DefaultGapIsStoredAsItsEffectiveValue) {
+  Pipeline pipeline;  // gap 0: the smoothing window
+  const Pipeline back = Pipeline::from_json(pipeline.to_json());
+  EXPECT_EQ(back.effective_gap_seconds(), pipeline.effective_gap_seconds());
+}
+
+TEST(PipelineJson, LibsvmPipelineRoundTrips) {
+  const Pipeline pipeline = Pipeline::libsvm_input(3);
+  const Pipeline back = Pipeline::from_json(pipeline.to_json());
+  EXPECT_TRUE(back.libsvm);
+  EXPECT_EQ(back.term_names(), (std::vector<std::string>{"x1", "x2", "x3"}));
+}
+
+TEST(PipelineJson, RejectsWhatDoesNotFit) {
+  const nlohmann::json good = Pipeline{}.to_json();
+  auto with = [&](const char* key, nlohmann::json value) {
+    nlohmann::json json = good;
+    json[key] = std::move(value);
+    return json;
+  };
+  EXPECT_THROW(Pipeline::from_json(with("version", 2)), Error);
+  EXPECT_THROW(Pipeline::from_json(with("window", "centered")), Error);
+  EXPECT_THROW(Pipeline::from_json(with("terms", {"dT", "humidity"})), UsageError);
+  EXPECT_THROW(Pipeline::from_json(with("terms", nlohmann::json::array())), UsageError);
+  EXPECT_THROW(Pipeline::from_json(with("smooth_seconds", -1)), UsageError);
+  EXPECT_THROW(Pipeline::from_json(with("rate_span_seconds", 0)), UsageError);
+  EXPECT_THROW(Pipeline::from_json(with("decimation", 0)), UsageError);
+  nlohmann::json missing = good;
+  missing.erase("reference_temperature");
+  EXPECT_ANY_THROW(Pipeline::from_json(missing));
+}
+
+TEST(FeatureTerm, ParsesKnownNames) {
+  EXPECT_EQ(FeatureTerm::parse("dT").kind, FeatureTerm::Kind::delta_t);
+  EXPECT_EQ(FeatureTerm::parse("rate").kind, FeatureTerm::Kind::rate);
+  EXPECT_EQ(FeatureTerm::parse("x3").input_index, 2u);
+  EXPECT_THROW(FeatureTerm::parse("x0"), UsageError);
+  EXPECT_THROW(FeatureTerm::parse("dt"), UsageError);
+}
+
+}  // namespace
+}  // namespace thermodrift
