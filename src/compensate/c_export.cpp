@@ -1,0 +1,546 @@
+#include "thermodrift/compensate/c_export.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <numeric>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+
+namespace {
+
+// The C++ TrailingMean starts with room for 16 samples and doubles; its exact re-sum
+// runs every `ring size` pushes. The header mirrors that period (not the allocation) so
+// that both round the same way.
+constexpr std::size_t kTrailingMeanInitialCapacity = 16;
+// A state larger than this is a wrong --max-rate, not a device.
+constexpr double kMaxRingEntries = 1e8;
+constexpr double kDefaultMaxRateHz = 100;
+
+bool valid_identifier(const std::string& name) {
+  if (name.empty() || !(std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_')) return false;
+  return std::all_of(name.begin(), name.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+std::string upper(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return text;
+}
+
+// C comments must not be closed by text taken from a model file.
+std::string comment_safe(std::string text) {
+  for (std::size_t at = text.find("*/"); at != std::string::npos; at = text.find("*/")) text.replace(at, 2, "* /");
+  for (char& c : text) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return text;
+}
+
+void check_exportable(const DriftModel& model) {
+  if (model.axes.empty()) throw UsageError("the model has no axes to export");
+  for (const auto& axis : model.axes) {
+    if (axis.pipeline.libsvm) {
+      throw UsageError("a model fitted on libsvm-format data has no chamber-log pipeline to export");
+    }
+    for (const auto& term : axis.pipeline.terms) {
+      if (term.kind == FeatureTerm::Kind::input) {
+        throw UsageError(fmt::format("axis {}: feature term {} cannot be computed on a device", axis.name,
+                                     term.name()));
+      }
+    }
+  }
+}
+
+// Literals that read back to the same value in the header's precision.
+class Literal {
+ public:
+  explicit Literal(bool single_precision) : single_(single_precision) {}
+
+  std::string operator()(double value) const {
+    std::string text = single_ ? fmt::format("{}", static_cast<float>(value)) : fmt::format("{}", value);
+    if (text.find_first_of(".eE") == std::string::npos) text += ".0";
+    if (single_) text += 'f';
+    return text;
+  }
+  // Time constants are always double: a float clock loses sub-sample resolution in hours.
+  static std::string time(double value) {
+    std::string text = fmt::format("{}", value);
+    if (text.find_first_of(".eE") == std::string::npos) text += ".0";
+    return text;
+  }
+
+ private:
+  bool single_;
+};
+
+void append_array(std::string& out, const Literal& literal, const double* values, std::size_t count,
+                  std::size_t per_line = 4) {
+  for (std::size_t i = 0; i < count; ++i) {
+    out += (i % per_line == 0) ? "\n    " : " ";
+    out += literal(values[i]);
+    if (i + 1 < count) out += ',';
+  }
+}
+
+}  // namespace
+
+bool CExportOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& reason) {
+    if (error != nullptr) *error = reason;
+    return false;
+  };
+  if (!valid_identifier(prefix)) return fail(fmt::format("prefix '{}' is not a C identifier", prefix));
+  if (max_rate_hz && !(std::isfinite(*max_rate_hz) && *max_rate_hz > 0)) {
+    return fail(fmt::format("--max-rate must be a positive number of hertz, not {}", *max_rate_hz));
+  }
+  return true;
+}
+
+double export_max_rate_hz(const DriftModel& model, const CExportOptions& options) {
+  if (options.max_rate_hz) return *options.max_rate_hz;
+  if (model.rate_hz && *model.rate_hz > 0) return *model.rate_hz;
+  return kDefaultMaxRateHz;
+}
+
+namespace {
+std::size_t ring_capacity(double seconds, double max_rate_hz, std::size_t extra) {
+  const double entries = std::ceil(seconds * max_rate_hz) + static_cast<double>(extra);
+  if (!(entries <= kMaxRingEntries)) {
+    throw UsageError(fmt::format("{} s at {} Hz needs {} ring entries per axis; lower --max-rate",
+                                 seconds, max_rate_hz, entries));
+  }
+  return static_cast<std::size_t>(entries);
+}
+}  // namespace
+
+// Samples strictly increasing at most max_rate apart: (t - W, t] holds at most
+// floor(W·rate) + 1 of them after the eviction; one more absorbs rounding of the stamps.
+std::size_t mean_ring_capacity(const Pipeline& pipeline, double max_rate_hz) {
+  return ring_capacity(pipeline.smooth_seconds, max_rate_hz, 2);
+}
+
+// Before the oldest entries are advanced past: the one at or before t' - span, those in
+// (t' - span, t'] of the previous sample t', and the new one; plus one for rounding.
+std::size_t history_ring_capacity(const Pipeline& pipeline, double max_rate_hz) {
+  return ring_capacity(pipeline.rate_span_seconds, max_rate_hz, 3);
+}
+
+std::size_t ModelSize::constant_bytes() const {
+  return std::accumulate(axes.begin(), axes.end(), std::size_t{0},
+                         [](std::size_t sum, const Axis& axis) { return sum + axis.constant_bytes; });
+}
+
+std::size_t ModelSize::flops_per_sample() const {
+  return std::accumulate(axes.begin(), axes.end(), std::size_t{0},
+                         [](std::size_t sum, const Axis& axis) { return sum + axis.flops_per_sample; });
+}
+
+std::size_t ModelSize::exp_per_sample() const {
+  return std::accumulate(axes.begin(), axes.end(), std::size_t{0},
+                         [](std::size_t sum, const Axis& axis) { return sum + axis.exp_per_sample; });
+}
+
+std::string ModelSize::table() const {
+  std::string out = fmt::format("{:<12} {:<9} {:>8} {:>10} {:>15} {:>11}\n", "axis", "model",
+                                "SV/terms", "constants", "flops/sample", "exp/sample");
+  for (const auto& axis : axes) {
+    const std::size_t count = axis.kind == "svr" ? axis.support_vectors : axis.regressors;
+    out += fmt::format("{:<12} {:<9} {:>8} {:>8} B {:>15} {:>11}\n", axis.name, axis.kind, count,
+                       axis.constant_bytes, axis.flops_per_sample, axis.exp_per_sample);
+  }
+  out += fmt::format("{:<12} {:<9} {:>8} {:>8} B {:>15} {:>11}   ({} operations/sample, {})\n", "total", "",
+                     "", constant_bytes(), flops_per_sample(), exp_per_sample(), operations_per_sample(),
+                     single_precision ? "float" : "double");
+  return out;
+}
+
+ModelSize model_size(const DriftModel& model, bool single_precision) {
+  const std::size_t real = single_precision ? sizeof(float) : sizeof(double);
+  // Per axis: trailing mean (add, evict, divide), rate (two subtractions, divide, scale),
+  // ΔT, and gyro - drift.
+  constexpr std::size_t kPipelineFlops = 9;
+  // smooth, span, gap, warm-up (double) and the reference temperature.
+  const std::size_t pipeline_bytes = 4 * sizeof(double) + real;
+  ModelSize size;
+  size.single_precision = single_precision;
+  for (const auto& axis_model : model.axes) {
+    ModelSize::Axis axis;
+    axis.name = axis_model.name;
+    axis.kind = axis_model.kind;
+    axis.features = axis_model.pipeline.terms.size();
+    const std::size_t d = axis.features;
+    axis.constant_bytes = pipeline_bytes;
+    axis.flops_per_sample = kPipelineFlops;
+    if (const auto* svr = std::get_if<SvrModel>(&axis_model.model)) {
+      const auto sv = static_cast<std::size_t>(svr->function.support_vectors.rows());
+      axis.support_vectors = sv;
+      // support vectors, coefficients, feature mean and scale, bias, gamma, target mean and scale
+      axis.constant_bytes += (sv * d + sv + 2 * d + 4) * real;
+      // standardize (2d), per SV: d subtractions, d multiplies, d additions, -γ·s, c·e^…, sum;
+      // un-standardize (2)
+      axis.flops_per_sample += 2 * d + sv * (3 * d + 3) + 2;
+      axis.exp_per_sample = sv;
+    } else if (const auto* linear = std::get_if<LinearModel>(&axis_model.model)) {
+      axis.regressors = linear->regressors.size();
+      axis.constant_bytes += (axis.regressors + 1) * real + axis.regressors * d;  // powers as bytes
+      for (const auto& regressor : linear->regressors) {
+        axis.flops_per_sample += static_cast<std::size_t>(
+                                     std::accumulate(regressor.powers.begin(), regressor.powers.end(), 0)) +
+                                 2;
+      }
+    }
+    size.axes.push_back(axis);
+  }
+  return size;
+}
+
+std::size_t exported_state_bytes(const DriftModel& model, const CExportOptions& options) {
+  const double rate = export_max_rate_hz(model, options);
+  std::size_t mean = 0;
+  std::size_t history = 0;
+  for (const auto& axis : model.axes) {
+    mean = std::max(mean, mean_ring_capacity(axis.pipeline, rate));
+    history = std::max(history, history_ring_capacity(axis.pipeline, rate));
+  }
+  // A ring entry is a double time and a value (padded to 16 bytes in both precisions on
+  // common ABIs); a few counters and times per axis.
+  const std::size_t entry = 16;
+  return model.axes.size() * ((mean + history) * entry + 96);
+}
+
+std::string export_c_header(const DriftModel& model, const CExportOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw UsageError(error);
+  check_exportable(model);
+  const Literal literal(options.single_precision);
+  const std::string& p = options.prefix;
+  const std::string P = upper(p);
+  const std::string exp_name = options.single_precision ? "expf" : "exp";
+  const double rate = export_max_rate_hz(model, options);
+  std::size_t mean_capacity = 0;
+  std::size_t history_capacity = 0;
+  for (const auto& axis : model.axes) {
+    mean_capacity = std::max(mean_capacity, mean_ring_capacity(axis.pipeline, rate));
+    history_capacity = std::max(history_capacity, history_ring_capacity(axis.pipeline, rate));
+  }
+  const ModelSize size = model_size(model, options.single_precision);
+  const std::size_t axes = model.axes.size();
+
+  std::string out;
+  out += fmt::format(
+      "/* {p}.h: a thermodrift gyro drift model for the navigation computer.\n"
+      " * Generated by `thermodrift export`{source}. Do not edit; export again.\n"
+      " *\n"
+      " * C99, no allocation, no writable globals, libm's {exp} only. Units: time in s,\n"
+      " * gyro rates in deg/h, temperatures in degC (one channel per axis).\n"
+      " *\n"
+      " *   {p}_state state;            (caller-owned, {state_bytes} bytes; static or global is fine)\n"
+      " *   {p}_init(&state);\n"
+      " *   for each sample:\n"
+      " *     int ready = {p}_step(&state, time_s, gyro_dph, temperature_c, compensated_dph);\n"
+      " *\n"
+      " * step returns 1 when every axis has {warm} s of history since the start or the last\n"
+      " * restart, 0 during warm-up (the output is then the best causal estimate from a partial\n"
+      " * window). A time step longer than the gap threshold, or a time that does not\n"
+      " * increase, restarts the warm-up. Ring buffers are sized for {rate} Hz: a device that\n"
+      " * samples faster drops the oldest sample of a full ring, counts it in\n"
+      " * state.dropped_samples and returns 0 for that step (never writes out of bounds).\n"
+      " *\n"
+      " * Model size ({precision}):\n",
+      fmt::arg("p", p), fmt::arg("source", options.source.empty() ? "" : " from " + comment_safe(options.source)),
+      fmt::arg("exp", exp_name), fmt::arg("state_bytes", exported_state_bytes(model, options)),
+      fmt::arg("warm", model.axes.front().pipeline.warm_up_seconds()), fmt::arg("rate", rate),
+      fmt::arg("precision", options.single_precision ? "float" : "double"));
+  for (const auto& line : {size.table()}) {
+    std::size_t begin = 0;
+    while (begin < line.size()) {
+      const std::size_t end = line.find('\n', begin);
+      out += " *   " + comment_safe(line.substr(begin, end - begin)) + "\n";
+      begin = end == std::string::npos ? line.size() : end + 1;
+    }
+  }
+  out += " */\n";
+  out += fmt::format("#ifndef {P}_H_INCLUDED\n#define {P}_H_INCLUDED\n\n#include <math.h>\n\n", fmt::arg("P", P));
+  out += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
+  out += fmt::format(
+      "#define {P}_AXES {axes}\n"
+      "#define {P}_MAX_RATE_HZ {rate}\n"
+      "#define {P}_MEAN_CAPACITY {mean}\n"
+      "#define {P}_HISTORY_CAPACITY {history}\n"
+      "#define {P}_SINGLE_PRECISION {single}\n\n"
+      "typedef {real} {p}_real;\n\n"
+      "typedef struct {{\n"
+      "  double time;\n"
+      "  {p}_real value;\n"
+      "}} {p}_stamped;\n\n"
+      "/* One axis of the feature pipeline: the trailing mean of the temperature over\n"
+      " * (t - smooth, t] and the history of that mean for the backward-difference rate. */\n"
+      "typedef struct {{\n"
+      "  {p}_stamped mean_ring[{P}_MEAN_CAPACITY];\n"
+      "  unsigned long mean_head;\n"
+      "  unsigned long mean_count;\n"
+      "  unsigned long resum_period;        /* exact re-sum every this many pushes (mirrors the C++ ring) */\n"
+      "  unsigned long pushes_since_resum;\n"
+      "  {p}_real mean_sum;\n"
+      "  {p}_stamped history[{P}_HISTORY_CAPACITY];\n"
+      "  unsigned long history_head;\n"
+      "  unsigned long history_count;\n"
+      "  int started;\n"
+      "  double start_time;\n"
+      "  double last_time;\n"
+      "}} {p}_axis_state;\n\n"
+      "typedef struct {{\n"
+      "  {p}_axis_state axis[{P}_AXES];\n"
+      "  {p}_real drift[{P}_AXES];         /* last predicted drift per axis, deg/h */\n"
+      "  unsigned long dropped_samples;   /* ring overflows: the device sampled faster than {P}_MAX_RATE_HZ */\n"
+      "}} {p}_state;\n\n"
+      "typedef struct {{\n"
+      "  double smooth_seconds;\n"
+      "  double rate_span_seconds;\n"
+      "  double gap_seconds;\n"
+      "  double warm_up_seconds;\n"
+      "  {p}_real reference_temperature;\n"
+      "}} {p}_pipeline;\n\n",
+      fmt::arg("P", P), fmt::arg("p", p), fmt::arg("axes", axes), fmt::arg("rate", Literal::time(rate)),
+      fmt::arg("mean", mean_capacity), fmt::arg("history", history_capacity),
+      fmt::arg("single", options.single_precision ? 1 : 0),
+      fmt::arg("real", options.single_precision ? "float" : "double"));
+
+  out += fmt::format("static const {p}_pipeline {p}_pipelines[{P}_AXES] = {{\n", fmt::arg("p", p), fmt::arg("P", P));
+  for (std::size_t a = 0; a < axes; ++a) {
+    const Pipeline& pipeline = model.axes[a].pipeline;
+    out += fmt::format("    {{{}, {}, {}, {}, {}}}{}  /* {} */\n", Literal::time(pipeline.smooth_seconds),
+                       Literal::time(pipeline.rate_span_seconds), Literal::time(pipeline.effective_gap_seconds()),
+                       Literal::time(pipeline.warm_up_seconds()), literal(pipeline.reference_temperature),
+                       a + 1 < axes ? "," : "", comment_safe(model.axes[a].name));
+  }
+  out += "};\n\n";
+
+  // One drift function per axis: the model's prediction, term for term as in C++.
+  for (std::size_t a = 0; a < axes; ++a) {
+    const AxisModel& axis = model.axes[a];
+    const std::size_t d = axis.pipeline.terms.size();
+    const std::string name = fmt::format("{}_axis{}", p, a);
+    out += fmt::format("/* Axis {}: {} ({} model; terms {}). */\n", a, comment_safe(axis.name), axis.kind,
+                       fmt::join(axis.pipeline.term_names(), ", "));
+    if (const auto* svr = std::get_if<SvrModel>(&axis.model)) {
+      const auto& function = svr->function;
+      const auto sv = static_cast<std::size_t>(function.support_vectors.rows());
+      out += fmt::format("static const {}_real {}_feature_mean[{}] = {{", p, name, d);
+      append_array(out, literal, svr->scaling.feature_mean.data(), d);
+      out += "};\n";
+      out += fmt::format("static const {}_real {}_feature_scale[{}] = {{", p, name, d);
+      append_array(out, literal, svr->scaling.feature_scale.data(), d);
+      out += "};\n";
+      if (sv > 0) {
+        out += fmt::format("static const {}_real {}_support_vectors[{}][{}] = {{", p, name, sv, d);
+        for (std::size_t k = 0; k < sv; ++k) {
+          out += "\n    {";
+          for (std::size_t j = 0; j < d; ++j) {
+            out += literal(function.support_vectors(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j)));
+            if (j + 1 < d) out += ", ";
+          }
+          out += k + 1 < sv ? "}," : "}";
+        }
+        out += "};\n";
+        out += fmt::format("static const {}_real {}_coefficients[{}] = {{", p, name, sv);
+        append_array(out, literal, function.coefficients.data(), sv);
+        out += "};\n";
+      }
+      out += fmt::format(
+          "static inline {p}_real {name}_drift(const {p}_real features[{d}]) {{\n"
+          "  {p}_real x[{d}];\n"
+          "  {p}_real sum = {bias};\n"
+          "  int j;\n"
+          "  for (j = 0; j < {d}; ++j) x[j] = (features[j] - {name}_feature_mean[j]) / {name}_feature_scale[j];\n",
+          fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("bias", literal(function.bias)));
+      if (sv > 0) {
+        out += fmt::format(
+            "  {{\n"
+            "    unsigned long k;\n"
+            "    for (k = 0; k < {sv}; ++k) {{\n"
+            "      {p}_real squared = 0;\n"
+            "      for (j = 0; j < {d}; ++j) {{\n"
+            "        const {p}_real difference = {name}_support_vectors[k][j] - x[j];\n"
+            "        squared += difference * difference;\n"
+            "      }}\n"
+            "      sum += {name}_coefficients[k] * {exp}(-{gamma} * squared);\n"
+            "    }}\n"
+            "  }}\n",
+            fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("sv", sv),
+            fmt::arg("exp", exp_name), fmt::arg("gamma", literal(function.gamma)));
+      }
+      out += fmt::format("  return sum * {} + {};\n}}\n\n", literal(svr->scaling.target_scale),
+                         literal(svr->scaling.target_mean));
+    } else {
+      const auto& linear = std::get<LinearModel>(axis.model);
+      const std::size_t k_count = linear.regressors.size();
+      if (k_count > 0) {
+        out += fmt::format("static const {}_real {}_coefficients[{}] = {{", p, name, k_count);
+        append_array(out, literal, linear.coefficients.data(), k_count);
+        out += "};\n";
+        out += fmt::format("/* regressor k = product over terms i of features[i]^powers[k][i] */\n"
+                           "static const unsigned char {}_powers[{}][{}] = {{",
+                           name, k_count, d);
+        for (std::size_t k = 0; k < k_count; ++k) {
+          out += fmt::format("\n    {{{}}}{}", fmt::join(linear.regressors[k].powers, ", "), k + 1 < k_count ? "," : "");
+        }
+        out += "};\n";
+      }
+      out += fmt::format("static inline {}_real {}_drift(const {}_real features[{}]) {{\n", p, name, p, d);
+      out += fmt::format("  {}_real value = {};\n", p, literal(linear.intercept));
+      if (k_count > 0) {
+        out += fmt::format(
+            "  int k, i, power;\n"
+            "  for (k = 0; k < {k}; ++k) {{\n"
+            "    {p}_real regressor = 1;\n"
+            "    for (i = 0; i < {d}; ++i) {{\n"
+            "      for (power = 0; power < {name}_powers[k][i]; ++power) regressor *= features[i];\n"
+            "    }}\n"
+            "    value += {name}_coefficients[k] * regressor;\n"
+            "  }}\n",
+            fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("k", k_count));
+      } else {
+        out += "  (void)features;\n";
+      }
+      out += "  return value;\n}\n\n";
+    }
+  }
+
+  // The pipeline: FeatureStream::push and TrailingMean::push, step for step.
+  out += fmt::format(
+      "static inline void {p}_axis_restart({p}_axis_state* axis) {{\n"
+      "  axis->mean_head = 0;\n"
+      "  axis->mean_count = 0;\n"
+      "  axis->mean_sum = 0;\n"
+      "  axis->pushes_since_resum = 0;\n"
+      "  axis->history_head = 0;\n"
+      "  axis->history_count = 0;\n"
+      "  axis->started = 0;\n"
+      "}}\n\n"
+      "/* Resets every axis: call once before the first step (and to restart by hand). */\n"
+      "static inline void {p}_init({p}_state* state) {{\n"
+      "  int a;\n"
+      "  for (a = 0; a < {P}_AXES; ++a) {{\n"
+      "    {p}_axis_restart(&state->axis[a]);\n"
+      "    state->axis[a].resum_period = {initial};\n"
+      "    state->axis[a].start_time = 0;\n"
+      "    state->axis[a].last_time = 0;\n"
+      "    state->drift[a] = 0;\n"
+      "  }}\n"
+      "  state->dropped_samples = 0;\n"
+      "}}\n\n"
+      "/* Pushes one temperature; writes dT and the rate (degC/min); returns 1 once warm.\n"
+      " * Sets *dropped when a full ring had to lose its oldest sample. */\n"
+      "static inline int {p}_axis_push({p}_axis_state* axis, const {p}_pipeline* pipeline, double time,\n"
+      "                                 {p}_real temperature, {p}_real* delta_t, {p}_real* rate, int* dropped) {{\n"
+      "  {p}_real smoothed;\n"
+      "  double elapsed;\n"
+      "  const {p}_stamped* past;\n"
+      "  if (axis->started && (time - axis->last_time > pipeline->gap_seconds || !(time > axis->last_time))) {{\n"
+      "    {p}_axis_restart(axis);\n"
+      "  }}\n"
+      "  if (!axis->started) {{\n"
+      "    axis->started = 1;\n"
+      "    axis->start_time = time;\n"
+      "  }}\n"
+      "  axis->last_time = time;\n"
+      "\n"
+      "  /* trailing mean over (t - smooth, t] */\n"
+      "  while (axis->mean_count > 0 && axis->mean_ring[axis->mean_head].time <= time - pipeline->smooth_seconds) {{\n"
+      "    axis->mean_sum -= axis->mean_ring[axis->mean_head].value;\n"
+      "    axis->mean_head = (axis->mean_head + 1) % {P}_MEAN_CAPACITY;\n"
+      "    --axis->mean_count;\n"
+      "  }}\n"
+      "  if (axis->mean_count == axis->resum_period) axis->resum_period *= 2;\n"
+      "  if (axis->mean_count == {P}_MEAN_CAPACITY) {{\n"
+      "    axis->mean_sum -= axis->mean_ring[axis->mean_head].value;\n"
+      "    axis->mean_head = (axis->mean_head + 1) % {P}_MEAN_CAPACITY;\n"
+      "    --axis->mean_count;\n"
+      "    *dropped = 1;\n"
+      "  }}\n"
+      "  axis->mean_ring[(axis->mean_head + axis->mean_count) % {P}_MEAN_CAPACITY].time = time;\n"
+      "  axis->mean_ring[(axis->mean_head + axis->mean_count) % {P}_MEAN_CAPACITY].value = temperature;\n"
+      "  ++axis->mean_count;\n"
+      "  axis->mean_sum += temperature;\n"
+      "  /* a running sum drifts by rounding; re-adding the window once per period keeps it exact */\n"
+      "  if (++axis->pushes_since_resum >= axis->resum_period) {{\n"
+      "    unsigned long i;\n"
+      "    axis->mean_sum = 0;\n"
+      "    for (i = 0; i < axis->mean_count; ++i) {{\n"
+      "      axis->mean_sum += axis->mean_ring[(axis->mean_head + i) % {P}_MEAN_CAPACITY].value;\n"
+      "    }}\n"
+      "    axis->pushes_since_resum = 0;\n"
+      "  }}\n"
+      "  smoothed = axis->mean_sum / ({p}_real)axis->mean_count;\n"
+      "\n"
+      "  /* rate: backward difference to the last kept mean at or before t - span */\n"
+      "  if (axis->history_count == {P}_HISTORY_CAPACITY) {{\n"
+      "    axis->history_head = (axis->history_head + 1) % {P}_HISTORY_CAPACITY;\n"
+      "    --axis->history_count;\n"
+      "    *dropped = 1;\n"
+      "  }}\n"
+      "  axis->history[(axis->history_head + axis->history_count) % {P}_HISTORY_CAPACITY].time = time;\n"
+      "  axis->history[(axis->history_head + axis->history_count) % {P}_HISTORY_CAPACITY].value = smoothed;\n"
+      "  ++axis->history_count;\n"
+      "  while (axis->history_count >= 2 &&\n"
+      "         axis->history[(axis->history_head + 1) % {P}_HISTORY_CAPACITY].time <= time - pipeline->rate_span_seconds) {{\n"
+      "    axis->history_head = (axis->history_head + 1) % {P}_HISTORY_CAPACITY;\n"
+      "    --axis->history_count;\n"
+      "  }}\n"
+      "  past = &axis->history[axis->history_head];\n"
+      "  elapsed = time - past->time;\n"
+      "  *rate = elapsed > 0 ? (smoothed - past->value) / ({p}_real)elapsed * ({p}_real)60 : ({p}_real)0;\n"
+      "  *delta_t = smoothed - pipeline->reference_temperature;\n"
+      "  return time - axis->start_time >= pipeline->warm_up_seconds;\n"
+      "}}\n\n",
+      fmt::arg("p", p), fmt::arg("P", P), fmt::arg("initial", kTrailingMeanInitialCapacity));
+
+  out += fmt::format(
+      "/* One sample: gyro in deg/h and temperature in degC per axis, time in s (increasing).\n"
+      " * Writes gyro - drift per axis to compensated (may alias gyro); returns 1 when ready. */\n"
+      "static inline int {p}_step({p}_state* state, double time, const double gyro[{P}_AXES],\n"
+      "                            const double temperature[{P}_AXES], double compensated[{P}_AXES]) {{\n"
+      "  int ready = 1;\n"
+      "  int dropped = 0;\n"
+      "  {p}_real delta_t;\n"
+      "  {p}_real rate;\n",
+      fmt::arg("p", p), fmt::arg("P", P));
+  for (std::size_t a = 0; a < axes; ++a) {
+    const auto& terms = model.axes[a].pipeline.terms;
+    out += fmt::format(
+        "  if (!{p}_axis_push(&state->axis[{a}], &{p}_pipelines[{a}], time, ({p}_real)temperature[{a}], &delta_t, &rate,\n"
+        "                   &dropped)) {{\n"
+        "    ready = 0;\n"
+        "  }}\n"
+        "  {{\n"
+        "    {p}_real features[{d}];\n",
+        fmt::arg("p", p), fmt::arg("a", a), fmt::arg("d", terms.size()));
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+      out += fmt::format("    features[{}] = {};\n", i, terms[i].kind == FeatureTerm::Kind::rate ? "rate" : "delta_t");
+    }
+    out += fmt::format(
+        "    state->drift[{a}] = {p}_axis{a}_drift(features);\n"
+        "  }}\n"
+        "  compensated[{a}] = gyro[{a}] - (double)state->drift[{a}];\n",
+        fmt::arg("p", p), fmt::arg("a", a));
+  }
+  out += fmt::format(
+      "  if (dropped) {{\n"
+      "    ++state->dropped_samples;\n"
+      "    ready = 0;\n"
+      "  }}\n"
+      "  return ready;\n"
+      "}}\n\n"
+      "#ifdef __cplusplus\n}}\n#endif\n\n"
+      "#endif /* {P}_H_INCLUDED */\n",
+      fmt::arg("P", P));
+  return out;
+}
+
+}  // namespace thermodrift

@@ -1,0 +1,349 @@
+// Tests of compensate/c_export: the exported C99 header is compiled with
+// gcc -std=c99 -Wall -Wextra -Werror -pedantic, run on a simulated log, and compared
+// sample by sample with the C++ Compensator (linear and SVR models, double and float,
+// warm-up, a gap in time, a device sampling faster than the rings are sized for).
+#include "thermodrift/compensate/c_export.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "../../support/temp_dir.hpp"
+#include "thermodrift/compensate/compensator.hpp"
+#include "thermodrift/error.hpp"
+#include "thermodrift/models/svr.hpp"
+#include "thermodrift/sim/simulator.hpp"
+
+namespace thermodrift {
+namespace {
+
+using testing::TempDir;
+
+ChamberLog simulated_log() {
+  sim::SimulatorOptions options;
+  options.cycles = 1;
+  options.rate_hz = 1.0;
+  const sim::ChamberRun run = sim::simulate(options);
+  ChamberLog log;
+  log.source = "simulated";
+  log.time = run.column("time_s");
+  for (const char* axis : {"x", "y", "z"}) {
+    log.gyro_names.push_back(std::string("gyro_") + axis);
+    log.gyro.push_back(run.column(std::string("gyro_") + axis));
+    log.temperature_names.push_back(std::string("temp_") + axis);
+    log.temperature.push_back(run.column(std::string("temp_") + axis));
+  }
+  return log;
+}
+
+// The log without rows [begin, end): a gap in time the pipeline must restart after.
+ChamberLog without_rows(const ChamberLog& log, std::size_t begin, std::size_t end) {
+  ChamberLog cut = log;
+  auto erase = [&](std::vector<double>& column) {
+    column.erase(column.begin() + static_cast<std::ptrdiff_t>(begin), column.begin() + static_cast<std::ptrdiff_t>(end));
+  };
+  erase(cut.time);
+  for (auto& column : cut.gyro) erase(column);
+  for (auto& column : cut.temperature) erase(column);
+  return cut;
+}
+
+Pipeline chamber_pipeline() {
+  Pipeline pipeline;
+  pipeline.smooth_seconds = 100;
+  pipeline.rate_span_seconds = 100;
+  pipeline.decimation = 10;
+  pipeline.reference_temperature = 20;
+  return pipeline;
+}
+
+// One model per axis fitted on the log: "linear" (quadratic regressors, to exercise
+// powers) or "svr" (fixed C, γ, ε; a few hundred support vectors).
+DriftModel fitted_model(const ChamberLog& log, const std::string& kind) {
+  DriftModel model;
+  model.time_column = "time_s";
+  for (std::size_t a = 0; a < log.axes(); ++a) {
+    AxisModel axis;
+    axis.name = log.gyro_names[a];
+    axis.gyro_column = log.gyro_names[a];
+    axis.temperature_column = log.temperature_names[a];
+    axis.pipeline = chamber_pipeline();
+    axis.kind = kind;
+    const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
+    if (kind == "linear") {
+      axis.model = fit_least_squares(table.features, table.target, quadratic_regressors(2));
+    } else {
+      SvrModel svr;
+      svr.scaling = Standardization::of(table.features, table.target);
+      SvrTrainer trainer(SvrOptions{.C = 10, .gamma = 0.5, .epsilon = 0.05});
+      svr.function = trainer.train(svr.scaling.features(table.features), svr.scaling.target(table.target)).function;
+      svr.C = 10;
+      svr.epsilon = 0.05;
+      axis.model = std::move(svr);
+    }
+    model.axes.push_back(std::move(axis));
+  }
+  return model;
+}
+
+constexpr const char* kDriver = R"(#include <stdio.h>
+#include "model.h"
+
+/* Reads "time gyro... temperature..." lines, prints "ready compensated..." lines. */
+int main(int argc, char** argv) {
+  static thermodrift_state state;
+  double time;
+  double gyro[THERMODRIFT_AXES];
+  double temperature[THERMODRIFT_AXES];
+  double compensated[THERMODRIFT_AXES];
+  FILE* in;
+  int a;
+  if (argc != 2 || (in = fopen(argv[1], "r")) == NULL) return 2;
+  thermodrift_init(&state);
+  while (fscanf(in, "%lf", &time) == 1) {
+    int ready;
+    for (a = 0; a < THERMODRIFT_AXES; ++a) {
+      if (fscanf(in, "%lf", &gyro[a]) != 1) return 3;
+    }
+    for (a = 0; a < THERMODRIFT_AXES; ++a) {
+      if (fscanf(in, "%lf", &temperature[a]) != 1) return 3;
+    }
+    ready = thermodrift_step(&state, time, gyro, temperature, compensated);
+    printf("%d", ready);
+    for (a = 0; a < THERMODRIFT_AXES; ++a) printf(" %.17g", compensated[a]);
+    printf("\n");
+  }
+  printf("dropped %lu\n", state.dropped_samples);
+  fclose(in);
+  return 0;
+}
+)";
+
+struct CRun {
+  std::vector<int> ready;
+  std::vector<std::vector<double>> compensated;  // [row][axis]
+  unsigned long dropped = 0;
+};
+
+// Writes the header, compiles the driver with it under strict C99 and runs it on `log`.
+CRun run_exported(const TempDir& dir, const std::string& header, const ChamberLog& log,
+                  const std::string& extra_flags = "") {
+  dir.write("model.h", header);
+  dir.write("driver.c", kDriver);
+  std::ostringstream samples;
+  samples.precision(17);
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    samples << log.time[i];
+    for (const auto& gyro : log.gyro) samples << ' ' << gyro[i];
+    for (const auto& temperature : log.temperature) samples << ' ' << temperature[i];
+    samples << '\n';
+  }
+  dir.write("samples.txt", samples.str());
+  const auto compiled = testing::run_in(
+      dir, "gcc -std=c99 -Wall -Wextra -Werror -pedantic -O2 " + extra_flags + " driver.c -o driver -lm");
+  EXPECT_EQ(compiled.status, 0) << compiled.err;
+  const auto ran = testing::run_in(dir, "./driver samples.txt");
+  EXPECT_EQ(ran.status, 0) << ran.err;
+  CRun result;
+  for (const auto& line : testing::split_lines(ran.out)) {
+    std::istringstream in(line);
+    if (line.rfind("dropped", 0) == 0) {
+      std::string word;
+      in >> word >> result.dropped;
+      continue;
+    }
+    int ready = 0;
+    in >> ready;
+    std::vector<double> values(log.axes());
+    for (double& value : values) in >> value;
+    result.ready.push_back(ready);
+    result.compensated.push_back(values);
+  }
+  return result;
+}
+
+struct CppRun {
+  std::vector<int> ready;
+  std::vector<std::vector<double>> compensated;
+  double drift_scale = 0;  // largest |drift| of any axis, °/h
+};
+
+CppRun run_compensator(const DriftModel& model, const ChamberLog& log) {
+  Compensator compensator(model);
+  CppRun result;
+  std::vector<double> gyro(log.axes());
+  std::vector<double> temperature(log.axes());
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    for (std::size_t a = 0; a < log.axes(); ++a) {
+      gyro[a] = log.gyro[a][i];
+      temperature[a] = log.temperature[a][i];
+    }
+    const auto& output = compensator.push(log.time[i], gyro, temperature);
+    result.ready.push_back(output.ready ? 1 : 0);
+    result.compensated.emplace_back(output.compensated.begin(), output.compensated.end());
+    for (double drift : output.drift) result.drift_scale = std::max(result.drift_scale, std::abs(drift));
+  }
+  return result;
+}
+
+// Largest |C - C++| over every sample and axis, relative to the drift's scale.
+double largest_relative_difference(const CRun& c, const CppRun& cpp) {
+  double largest = 0;
+  for (std::size_t i = 0; i < cpp.compensated.size(); ++i) {
+    for (std::size_t a = 0; a < cpp.compensated[i].size(); ++a) {
+      largest = std::max(largest, std::abs(c.compensated[i][a] - cpp.compensated[i][a]) / cpp.drift_scale);
+    }
+  }
+  return largest;
+}
+
+void expect_matches(const DriftModel& model, const ChamberLog& log, bool single_precision, double tolerance) {
+  TempDir dir;
+  CExportOptions options;
+  options.single_precision = single_precision;
+  options.max_rate_hz = 1.0;
+  const CRun c = run_exported(dir, export_c_header(model, options), log);
+  const CppRun cpp = run_compensator(model, log);
+  ASSERT_EQ(c.ready.size(), log.rows());
+  EXPECT_EQ(c.ready, cpp.ready);
+  EXPECT_EQ(c.dropped, 0u);
+  ASSERT_GT(cpp.drift_scale, 0.1);
+  const double difference = largest_relative_difference(c, cpp);
+  EXPECT_LE(difference, tolerance) << (single_precision ? "float" : "double");
+  std::printf("[ info ] %s %s: largest |C - C++| / drift scale (%.3g deg/h) = %.3g\n",
+              model.axes.front().kind.c_str(), single_precision ? "float" : "double", cpp.drift_scale,
+              difference);
+}
+
+class CExport : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    log_ = new ChamberLog(simulated_log());
+    linear_ = new DriftModel(fitted_model(*log_, "linear"));
+    svr_ = new DriftModel(fitted_model(*log_, "svr"));
+  }
+  static void TearDownTestSuite() {
+    delete svr_;
+    delete linear_;
+    delete log_;
+  }
+  static ChamberLog* log_;
+  static DriftModel* linear_;
+  static DriftModel* svr_;
+};
+ChamberLog* CExport::log_ = nullptr;
+DriftModel* CExport::linear_ = nullptr;
+DriftModel* CExport::svr_ = nullptr;
+
+TEST_F(CExport, LinearDoubleMatchesCompensator) { expect_matches(*linear_, *log_, false, 1e-9); }
+TEST_F(CExport, LinearFloatMatchesCompensator) { expect_matches(*linear_, *log_, true, 1e-5); }
+
+TEST_F(CExport, SvrDoubleMatchesCompensator) {
+  const auto& svr = std::get<SvrModel>(svr_->axes.front().model);
+  ASSERT_GT(svr.function.support_vectors.rows(), 10);
+  expect_matches(*svr_, *log_, false, 1e-9);
+}
+
+TEST_F(CExport, SvrFloatMatchesCompensator) { expect_matches(*svr_, *log_, true, 1e-5); }
+
+TEST_F(CExport, WarmUpAndGapRestartLikeTheCompensator) {
+  // 600 s missing in the middle of a ramp: longer than the 100 s gap threshold.
+  const ChamberLog cut = without_rows(*log_, 5000, 5600);
+  expect_matches(*svr_, cut, false, 1e-9);
+  const CppRun cpp = run_compensator(*svr_, cut);
+  // warm-up: 200 s (smooth + rate span) from the start and again from the gap
+  for (std::size_t i = 0; i < 400; ++i) {
+    const bool warm_at_start = cut.time[i] - cut.time[0] >= 200;
+    EXPECT_EQ(cpp.ready[i], warm_at_start ? 1 : 0) << i;
+    const bool warm_after_gap = cut.time[5000 + i] - cut.time[5000] >= 200;
+    EXPECT_EQ(cpp.ready[5000 + i], warm_after_gap ? 1 : 0) << 5000 + i;
+  }
+}
+
+TEST_F(CExport, DeviceFasterThanMaxRateDropsAndFlagsWithoutOverflow) {
+  TempDir dir;
+  CExportOptions options;
+  options.max_rate_hz = 0.25;  // rings hold 27 of the 100 samples a 100 s window needs at 1 Hz
+  const std::string header = export_c_header(*linear_, options);
+  ChamberLog head = without_rows(*log_, 2000, log_->rows());
+  // With the sanitizers when gcc has them: any write outside a ring fails the run.
+  const bool sanitizers = testing::run_in(dir, "echo 'int main(void){return 0;}' > probe.c && "
+                                               "gcc -fsanitize=address,undefined probe.c -o probe && ./probe")
+                              .status == 0;
+  const CRun c = run_exported(dir, header, head, sanitizers ? "-fsanitize=address,undefined -fno-sanitize-recover=all" : "");
+  ASSERT_EQ(c.ready.size(), head.rows());
+  EXPECT_GT(c.dropped, 1000u);
+  // Once a ring is full every step drops a sample and says "not ready".
+  EXPECT_TRUE(std::all_of(c.ready.begin(), c.ready.end(), [](int ready) { return ready == 0; }));
+  for (const auto& row : c.compensated) {
+    for (double value : row) EXPECT_TRUE(std::isfinite(value));
+  }
+}
+
+TEST_F(CExport, HeaderIsSelfContainedC99) {
+  CExportOptions options;
+  options.prefix = "imu_drift";
+  const std::string header = export_c_header(*svr_, options);
+  EXPECT_NE(header.find("static inline int imu_drift_step(imu_drift_state* state, double time"), std::string::npos);
+  EXPECT_NE(header.find("#define IMU_DRIFT_AXES 3"), std::string::npos);
+  EXPECT_EQ(header.find("malloc"), std::string::npos);
+  EXPECT_EQ(header.find("thermodrift_"), std::string::npos);
+  std::istringstream lines(header);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("#include", 0) == 0) EXPECT_EQ(line, "#include <math.h>");
+    // file-scope objects are const; functions are static inline
+    if (line.rfind("static ", 0) == 0) {
+      EXPECT_TRUE(line.rfind("static const ", 0) == 0 || line.rfind("static inline ", 0) == 0) << line;
+    }
+  }
+  // The float header calls expf only.
+  options.single_precision = true;
+  const std::string single = export_c_header(*svr_, options);
+  EXPECT_NE(single.find("expf("), std::string::npos);
+  EXPECT_EQ(single.find(" exp("), std::string::npos);
+}
+
+TEST_F(CExport, RejectsBadOptionsAndLibsvmModels) {
+  CExportOptions options;
+  options.prefix = "2fast";
+  EXPECT_THROW(export_c_header(*linear_, options), UsageError);
+  options.prefix = "thermodrift";
+  options.max_rate_hz = -1;
+  EXPECT_THROW(export_c_header(*linear_, options), UsageError);
+  options.max_rate_hz = 1e9;  // 1e11 ring entries
+  EXPECT_THROW(export_c_header(*linear_, options), UsageError);
+  DriftModel libsvm = *linear_;
+  libsvm.axes.front().pipeline = Pipeline::libsvm_input(2);
+  EXPECT_THROW(export_c_header(libsvm, CExportOptions{}), UsageError);
+}
+
+TEST_F(CExport, ModelSizeCountsSupportVectorsBytesAndOperations) {
+  const ModelSize size = model_size(*svr_);
+  ASSERT_EQ(size.axes.size(), 3u);
+  std::size_t support_vectors = 0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto& svr = std::get<SvrModel>(svr_->axes[a].model);
+    const auto sv = static_cast<std::size_t>(svr.function.support_vectors.rows());
+    EXPECT_EQ(size.axes[a].support_vectors, sv);
+    EXPECT_EQ(size.axes[a].exp_per_sample, sv);
+    EXPECT_GE(size.axes[a].constant_bytes, (sv * 2 + sv) * sizeof(double));
+    EXPECT_GE(size.axes[a].flops_per_sample, sv * (3 * 2 + 3));
+    support_vectors += sv;
+  }
+  EXPECT_EQ(size.exp_per_sample(), support_vectors);
+  EXPECT_EQ(size.operations_per_sample(), size.flops_per_sample() + support_vectors);
+  EXPECT_LT(model_size(*svr_, true).constant_bytes(), size.constant_bytes());
+  EXPECT_NE(size.table().find("total"), std::string::npos);
+  const ModelSize linear = model_size(*linear_);
+  EXPECT_EQ(linear.axes[0].regressors, 5u);
+  EXPECT_EQ(linear.exp_per_sample(), 0u);
+}
+
+}  // namespace
+}  // namespace thermodrift
