@@ -230,6 +230,14 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
   }
   const ModelSize size = model_size(model, options.single_precision);
   const std::size_t axes = model.axes.size();
+  const bool single = options.single_precision;
+  // In float, running sums (the trailing mean, the SVR's sum over support vectors) are
+  // compensated (Kahan), which keeps them within a few ulp of the double result; in
+  // double they are plain sums, operation for operation as in C++.
+  auto accumulate = [&](const std::string& sum, const std::string& carry, const std::string& value) {
+    if (!single) return fmt::format("{} += {};", sum, value);
+    return fmt::format("{}_accumulate(&{}, &{}, {});", p, sum, carry, value);
+  };
 
   std::string out;
   out += fmt::format(
@@ -287,6 +295,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  unsigned long resum_period;        /* exact re-sum every this many pushes (mirrors the C++ ring) */\n"
       "  unsigned long pushes_since_resum;\n"
       "  {p}_real mean_sum;\n"
+      "{carry_field}"
       "  {p}_stamped history[{P}_HISTORY_CAPACITY];\n"
       "  unsigned long history_head;\n"
       "  unsigned long history_count;\n"
@@ -309,6 +318,9 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       fmt::arg("P", P), fmt::arg("p", p), fmt::arg("axes", axes), fmt::arg("rate", Literal::time(rate)),
       fmt::arg("mean", mean_capacity), fmt::arg("history", history_capacity),
       fmt::arg("single", options.single_precision ? 1 : 0),
+      fmt::arg("carry_field", options.single_precision
+                                  ? fmt::format("  {}_real mean_carry;                /* Kahan compensation of mean_sum */\n", p)
+                                  : std::string()),
       fmt::arg("real", options.single_precision ? "float" : "double"));
 
   out += fmt::format("static const {p}_pipeline {p}_pipelines[{P}_AXES] = {{\n", fmt::arg("p", p), fmt::arg("P", P));
@@ -320,6 +332,19 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
                        a + 1 < axes ? "," : "", comment_safe(model.axes[a].name));
   }
   out += "};\n\n";
+
+  if (single) {
+    out += fmt::format(
+        "/* Compensated (Kahan) summation: *sum + value with the rounding error carried.\n"
+        " * Do not compile with -ffast-math, which would optimise the carry away. */\n"
+        "static inline void {p}_accumulate({p}_real* sum, {p}_real* carry, {p}_real value) {{\n"
+        "  const {p}_real corrected = value - *carry;\n"
+        "  const {p}_real total = *sum + corrected;\n"
+        "  *carry = (total - *sum) - corrected;\n"
+        "  *sum = total;\n"
+        "}}\n\n",
+        fmt::arg("p", p));
+  }
 
   // One drift function per axis: the model's prediction, term for term as in C++.
   for (std::size_t a = 0; a < axes; ++a) {
@@ -356,9 +381,11 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
           "static inline {p}_real {name}_drift(const {p}_real features[{d}]) {{\n"
           "  {p}_real x[{d}];\n"
           "  {p}_real sum = {bias};\n"
+          "{carry}"
           "  int j;\n"
           "  for (j = 0; j < {d}; ++j) x[j] = (features[j] - {name}_feature_mean[j]) / {name}_feature_scale[j];\n",
-          fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("bias", literal(function.bias)));
+          fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("bias", literal(function.bias)),
+          fmt::arg("carry", single && sv > 0 ? fmt::format("  {}_real carry = 0;\n", p) : std::string()));
       if (sv > 0) {
         out += fmt::format(
             "  {{\n"
@@ -369,11 +396,13 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
             "        const {p}_real difference = {name}_support_vectors[k][j] - x[j];\n"
             "        squared += difference * difference;\n"
             "      }}\n"
-            "      sum += {name}_coefficients[k] * {exp}(-{gamma} * squared);\n"
+            "      {accumulate_term}\n"
             "    }}\n"
             "  }}\n",
             fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("sv", sv),
-            fmt::arg("exp", exp_name), fmt::arg("gamma", literal(function.gamma)));
+            fmt::arg("accumulate_term",
+                     accumulate("sum", "carry", fmt::format("{}_coefficients[k] * {}(-{} * squared)", name, exp_name,
+                                                            literal(function.gamma)))));
       }
       out += fmt::format("  return sum * {} + {};\n}}\n\n", literal(svr->scaling.target_scale),
                          literal(svr->scaling.target_mean));
@@ -418,6 +447,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  axis->mean_head = 0;\n"
       "  axis->mean_count = 0;\n"
       "  axis->mean_sum = 0;\n"
+      "{reset_carry}"
       "  axis->pushes_since_resum = 0;\n"
       "  axis->history_head = 0;\n"
       "  axis->history_count = 0;\n"
@@ -453,13 +483,13 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "\n"
       "  /* trailing mean over (t - smooth, t] */\n"
       "  while (axis->mean_count > 0 && axis->mean_ring[axis->mean_head].time <= time - pipeline->smooth_seconds) {{\n"
-      "    axis->mean_sum -= axis->mean_ring[axis->mean_head].value;\n"
+      "    {subtract_oldest}\n"
       "    axis->mean_head = (axis->mean_head + 1) % {P}_MEAN_CAPACITY;\n"
       "    --axis->mean_count;\n"
       "  }}\n"
       "  if (axis->mean_count == axis->resum_period) axis->resum_period *= 2;\n"
       "  if (axis->mean_count == {P}_MEAN_CAPACITY) {{\n"
-      "    axis->mean_sum -= axis->mean_ring[axis->mean_head].value;\n"
+      "    {subtract_oldest}\n"
       "    axis->mean_head = (axis->mean_head + 1) % {P}_MEAN_CAPACITY;\n"
       "    --axis->mean_count;\n"
       "    *dropped = 1;\n"
@@ -467,13 +497,14 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  axis->mean_ring[(axis->mean_head + axis->mean_count) % {P}_MEAN_CAPACITY].time = time;\n"
       "  axis->mean_ring[(axis->mean_head + axis->mean_count) % {P}_MEAN_CAPACITY].value = temperature;\n"
       "  ++axis->mean_count;\n"
-      "  axis->mean_sum += temperature;\n"
+      "  {add_temperature}\n"
       "  /* a running sum drifts by rounding; re-adding the window once per period keeps it exact */\n"
       "  if (++axis->pushes_since_resum >= axis->resum_period) {{\n"
       "    unsigned long i;\n"
       "    axis->mean_sum = 0;\n"
+      "{reset_carry_inner}"
       "    for (i = 0; i < axis->mean_count; ++i) {{\n"
-      "      axis->mean_sum += axis->mean_ring[(axis->mean_head + i) % {P}_MEAN_CAPACITY].value;\n"
+      "      {add_entry}\n"
       "    }}\n"
       "    axis->pushes_since_resum = 0;\n"
       "  }}\n"
@@ -496,10 +527,18 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  past = &axis->history[axis->history_head];\n"
       "  elapsed = time - past->time;\n"
       "  *rate = elapsed > 0 ? (smoothed - past->value) / ({p}_real)elapsed * ({p}_real)60 : ({p}_real)0;\n"
-      "  *delta_t = smoothed - pipeline->reference_temperature;\n"
+      "  {delta_t}\n"
       "  return time - axis->start_time >= pipeline->warm_up_seconds;\n"
       "}}\n\n",
-      fmt::arg("p", p), fmt::arg("P", P), fmt::arg("initial", kTrailingMeanInitialCapacity));
+      fmt::arg("p", p), fmt::arg("P", P), fmt::arg("initial", kTrailingMeanInitialCapacity),
+      fmt::arg("delta_t", single ? "*delta_t = smoothed;  /* the float rings hold T - reference */"
+                                 : "*delta_t = smoothed - pipeline->reference_temperature;"),
+      fmt::arg("reset_carry", single ? "  axis->mean_carry = 0;\n" : ""),
+      fmt::arg("reset_carry_inner", single ? "    axis->mean_carry = 0;\n" : ""),
+      fmt::arg("subtract_oldest", accumulate("axis->mean_sum", "axis->mean_carry", "-axis->mean_ring[axis->mean_head].value")),
+      fmt::arg("add_temperature", accumulate("axis->mean_sum", "axis->mean_carry", "temperature")),
+      fmt::arg("add_entry", accumulate("axis->mean_sum", "axis->mean_carry",
+                                       fmt::format("axis->mean_ring[(axis->mean_head + i) % {}_MEAN_CAPACITY].value", P))));
 
   out += fmt::format(
       "/* One sample: gyro in deg/h and temperature in degC per axis, time in s (increasing).\n"
@@ -514,13 +553,19 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
   for (std::size_t a = 0; a < axes; ++a) {
     const auto& terms = model.axes[a].pipeline.terms;
     out += fmt::format(
-        "  if (!{p}_axis_push(&state->axis[{a}], &{p}_pipelines[{a}], time, ({p}_real)temperature[{a}], &delta_t, &rate,\n"
+        "  if (!{p}_axis_push(&state->axis[{a}], &{p}_pipelines[{a}], time, {temperature}, &delta_t, &rate,\n"
         "                   &dropped)) {{\n"
         "    ready = 0;\n"
         "  }}\n"
         "  {{\n"
         "    {p}_real features[{d}];\n",
-        fmt::arg("p", p), fmt::arg("a", a), fmt::arg("d", terms.size()));
+        fmt::arg("p", p), fmt::arg("a", a), fmt::arg("d", terms.size()),
+        // In float the pipeline runs on T - reference, rounded once from double: smaller
+        // numbers, smaller rounding; the mean and the rate are the same quantities.
+        fmt::arg("temperature",
+                 single ? fmt::format("({}_real)(temperature[{}] - {})", p, a,
+                                      Literal::time(model.axes[a].pipeline.reference_temperature))
+                        : fmt::format("temperature[{}]", a)));
     for (std::size_t i = 0; i < terms.size(); ++i) {
       out += fmt::format("    features[{}] = {};\n", i, terms[i].kind == FeatureTerm::Kind::rate ? "rate" : "delta_t");
     }
