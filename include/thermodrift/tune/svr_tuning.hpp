@@ -69,7 +69,7 @@ struct SvrTuningOptions {
   // corners of the box (large C, small σ) would otherwise dominate the run (docs/tuning.md).
   // 0 means: as in `solver`.
   double search_tolerance = 1e-2;
-  long search_max_iterations = 100'000;
+  long search_max_iterations = 20'000;
   // Squared distances of each training subset kept in memory when all subsets fit this
   // budget (then a kernel column is n exp()s); 0: computed from the samples per column.
   double distance_budget_mb = 0;
