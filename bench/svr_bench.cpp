@@ -1,7 +1,10 @@
 // ε-SVR: our solver against libsvm's svm-train on the same data in one run.
 //
 //   build/bin/svr_bench [--quick] [--skip-libsvm-corner] [--no-100k] [--threads N]
-//                       [--cache-mb MB] [--tolerance T]
+//                       [--cache-mb MB] [--tolerance T] [--only N] [--no-libsvm] [--verbose]
+//
+// --only N fits only the ordinary case at n = N (for profiling); --verbose adds our
+// summary line (kernel columns, SVs) under each row.
 //
 // Data: standardized chamber-like (ΔT, dT/dt) with a smooth nonlinear drift plus noise,
 // as in tests/reference. svm-train is timed as a process (wall time, including reading
@@ -122,6 +125,8 @@ void print_header() {
              "C", "gamma", "libsvm s", "iter", "obj", "ours s", "iter", "obj", "termination", "ratio");
 }
 
+bool verbose = false;
+
 void compare(const std::string& name, const Data& data, SvrOptions options, bool run_libsvm) {
   LibsvmResult libsvm;
   if (run_libsvm) {
@@ -144,6 +149,7 @@ void compare(const std::string& name, const Data& data, SvrOptions options, bool
   fmt::print("{:<26} {:>7} {:>8g} {:>6g} | {:>9} {:>10} {:>17} | {:>8.3f} {:>10} {:>17.6f} {:>15} | {:>7}\n", name,
              data.samples.rows(), options.C, options.gamma, libsvm_seconds, libsvm_iterations, libsvm_objective,
              s.seconds, s.iterations, s.dual_objective, to_string(s.termination), ratio);
+  if (verbose) fmt::print("    {}\n", s.BriefReport());
   std::fflush(stdout);
 }
 
@@ -231,7 +237,8 @@ void repeated_fits(const Data& data, SvrOptions options) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false, skip_libsvm_corner = false, run_100k = true;
+  bool quick = false, skip_libsvm_corner = false, run_100k = true, run_libsvm = true;
+  int only = 0;
   SvrOptions base;
   base.threads = 2;
   base.cache_mb = 200;
@@ -252,9 +259,12 @@ int main(int argc, char** argv) {
     else if (argument == "--threads") base.threads = std::stoi(value());
     else if (argument == "--cache-mb") base.cache_mb = std::stod(value());
     else if (argument == "--tolerance") base.tolerance = std::stod(value());
+    else if (argument == "--only") only = std::stoi(value());
+    else if (argument == "--no-libsvm") run_libsvm = false;
+    else if (argument == "--verbose") verbose = true;
     else {
       std::fprintf(stderr, "usage: svr_bench [--quick] [--skip-libsvm-corner] [--no-100k] [--threads N] "
-                           "[--cache-mb MB] [--tolerance T]\n");
+                           "[--cache-mb MB] [--tolerance T] [--only N] [--no-libsvm] [--verbose]\n");
       return 2;
     }
   }
@@ -264,24 +274,31 @@ int main(int argc, char** argv) {
              "ratio = svm-train time / our time\n\n",
              base.epsilon, base.tolerance, base.cache_mb, base.threads);
   print_header();
+  if (only > 0) {
+    SvrOptions ordinary = base;
+    ordinary.C = 215;
+    ordinary.gamma = 0.046;
+    compare("ordinary", chamber_like(only, 1), ordinary, run_libsvm);
+    return 0;
+  }
   std::vector<int> sizes{2000, 5000, 20000};
   if (quick) sizes = {2000, 5000};
   for (int count : sizes) {
     SvrOptions ordinary = base;
     ordinary.C = 215;
     ordinary.gamma = 0.046;
-    compare(fmt::format("ordinary"), chamber_like(count, 1), ordinary, true);
+    compare(fmt::format("ordinary"), chamber_like(count, 1), ordinary, run_libsvm);
   }
   {
     SvrOptions ordinary = base;
     ordinary.C = 1;
     ordinary.gamma = 0.5;
-    compare("libsvm defaults", chamber_like(quick ? 2000 : 5000, 2), ordinary, true);
+    compare("libsvm defaults", chamber_like(quick ? 2000 : 5000, 2), ordinary, run_libsvm);
   }
   SvrOptions corner = base;
   corner.C = 1e4;
   corner.gamma = 100;
-  compare("corner", chamber_like(2271, 3), corner, !skip_libsvm_corner);
+  compare("corner", chamber_like(2271, 3), corner, run_libsvm && !skip_libsvm_corner);
   fmt::print("\n");
 
   repeated_fits(chamber_like(quick ? 1000 : 2271, 4), base);

@@ -80,87 +80,55 @@ constexpr std::size_t kParallelColumnLength = 8192;
 }  // namespace
 
 RbfKernel::RbfKernel(const SvrDataset& data, double gamma, WorkerPool& pool)
-    : data_(data), gamma_(gamma), size_(data.size()), pool_(pool) {}
-
-double RbfKernel::operator()(std::size_t a, std::size_t b) const {
-  if (data_.has_distances()) {
-    return std::exp(-gamma_ * data_.squared_distances()(static_cast<Eigen::Index>(a),
-                                                        static_cast<Eigen::Index>(b)));
-  }
-  const Eigen::MatrixXd& x = data_.samples();
-  const auto ra = static_cast<Eigen::Index>(a);
-  const auto rb = static_cast<Eigen::Index>(b);
-  double squared = 0;
-  for (Eigen::Index feature = 0; feature < x.cols(); ++feature) {
-    const double difference = x(ra, feature) - x(rb, feature);
-    squared += difference * difference;
-  }
-  return std::exp(-gamma_ * squared);
+    : data_(data), gamma_(gamma), size_(data.size()), pool_(pool), order_(data.size()) {
+  for (std::size_t position = 0; position < size_; ++position) order_[position] = static_cast<int>(position);
+  const Eigen::MatrixXd& x = data.samples();
+  features_.resize(static_cast<std::size_t>(x.cols()));
+  for (Eigen::Index feature = 0; feature < x.cols(); ++feature)
+    features_[static_cast<std::size_t>(feature)].assign(x.col(feature).data(), x.col(feature).data() + size_);
 }
 
-void RbfKernel::column(std::size_t column, const std::vector<int>* rows, double* out) const {
-  const std::size_t count = rows ? rows->size() : size_;
+void RbfKernel::swap(std::size_t position_a, std::size_t position_b) {
+  std::swap(order_[position_a], order_[position_b]);
+  for (auto& values : features_) std::swap(values[position_a], values[position_b]);
+}
+
+void RbfKernel::column(std::size_t center, std::size_t begin, std::size_t end, double* out) const {
+  if (end <= begin) return;
+  const std::size_t count = end - begin;
   if (pool_.threads() > 1 && count >= kParallelColumnLength) {
-    pool_.run(count, [&](std::size_t begin, std::size_t end) {
-      column_range(column, rows, begin, end, out);
-    });
+    pool_.run(count, [&](std::size_t from, std::size_t to) { column_serial(center, begin + from, begin + to, out); });
   } else {
-    column_range(column, rows, 0, count, out);
+    column_serial(center, begin, end, out);
   }
 }
 
-// Rows [begin, end) of `rows` (or of all rows) of one column.
-void RbfKernel::column_range(std::size_t column, const std::vector<int>* rows, std::size_t begin,
-                             std::size_t end, double* out) const {
-  const double gamma = gamma_;
+// Positions [begin, end) of one column: squared distances feature by feature over
+// contiguous memory, then Eigen's vectorised exp. The exp runs on a scratch array padded
+// to whole packets, so that every entry takes the packet path: an entry's value must not
+// depend on the range it was computed in (a column may be computed in pieces).
+void RbfKernel::column_serial(std::size_t center, std::size_t begin, std::size_t end, double* out) const {
+  if (end <= begin) return;
+  constexpr Eigen::Index kPad = 8;
+  const auto count = static_cast<Eigen::Index>(end - begin);
+  Eigen::ArrayXd scratch = Eigen::ArrayXd::Zero((count + kPad - 1) / kPad * kPad);
   if (data_.has_distances()) {
-    const double* distances = data_.squared_distances().col(static_cast<Eigen::Index>(column)).data();
-    if (rows) {
-      for (std::size_t k = begin; k < end; ++k) {
-        const int row = (*rows)[k];
-        out[row] = std::exp(-gamma * distances[row]);
-      }
-    } else {
-      for (std::size_t row = begin; row < end; ++row) out[row] = std::exp(-gamma * distances[row]);
-    }
-    return;
-  }
-  const Eigen::MatrixXd& x = data_.samples();
-  const auto features = x.cols();
-  const auto center = static_cast<Eigen::Index>(column);
-  if (rows) {
-    for (std::size_t k = begin; k < end; ++k) {
-      const Eigen::Index row = (*rows)[k];
-      double squared = 0;
-      for (Eigen::Index feature = 0; feature < features; ++feature) {
-        const double difference = x(row, feature) - x(center, feature);
-        squared += difference * difference;
-      }
-      out[row] = std::exp(-gamma * squared);
-    }
-    return;
-  }
-  // Column-major samples: one pass per feature over contiguous memory.
-  for (std::size_t row = begin; row < end; ++row) out[row] = 0;
-  for (Eigen::Index feature = 0; feature < features; ++feature) {
-    const double* values = x.col(feature).data();
-    const double reference = values[center];
-    for (std::size_t row = begin; row < end; ++row) {
-      const double difference = values[row] - reference;
-      out[row] += difference * difference;
+    const double* distances = data_.squared_distances().col(order_[center]).data();
+    for (Eigen::Index k = 0; k < count; ++k) scratch[k] = distances[order_[begin + static_cast<std::size_t>(k)]];
+  } else {
+    for (const auto& values : features_) {
+      const double reference = values[center];
+      scratch.head(count) += (Eigen::Map<const Eigen::ArrayXd>(values.data() + begin, count) - reference).square();
     }
   }
-  for (std::size_t row = begin; row < end; ++row) out[row] = std::exp(-gamma * out[row]);
+  scratch = (scratch * -gamma_).exp();
+  std::copy(scratch.data(), scratch.data() + count, out + begin);
 }
 
 // ---------------------------------------------------------------------------- cache
 
-KernelCache::KernelCache(const RbfKernel& kernel, double budget_mb)
-    : kernel_(kernel),
-      size_(kernel.size()),
-      slot_of_(kernel.size(), -1),
-      epoch_of_(kernel.size(), 0),
-      previous_(kernel.size() + 1),
+KernelCache::KernelCache(RbfKernel& kernel, double budget_mb)
+    : kernel_(kernel), size_(kernel.size()), slot_of_(kernel.size(), -1), previous_(kernel.size() + 1),
       next_(kernel.size() + 1) {
   const double column_bytes = static_cast<double>(std::max<std::size_t>(size_, 1)) * sizeof(double);
   const double fitting = budget_mb * 1024.0 * 1024.0 / column_bytes;
@@ -170,53 +138,70 @@ KernelCache::KernelCache(const RbfKernel& kernel, double budget_mb)
   next_[size_] = sentinel;
 }
 
-void KernelCache::unlink(int column) {
-  next_[previous_[column]] = next_[column];
-  previous_[next_[column]] = previous_[column];
+void KernelCache::unlink(int sample) {
+  next_[previous_[sample]] = next_[sample];
+  previous_[next_[sample]] = previous_[sample];
 }
 
-void KernelCache::touch(int column) {
+void KernelCache::touch(int sample) {
   const int sentinel = static_cast<int>(size_);
   // most recently used sits just before the sentinel
-  previous_[column] = previous_[sentinel];
-  next_[column] = sentinel;
-  next_[previous_[sentinel]] = column;
-  previous_[sentinel] = column;
+  previous_[sample] = previous_[sentinel];
+  next_[sample] = sentinel;
+  next_[previous_[sentinel]] = sample;
+  previous_[sentinel] = sample;
 }
 
-const double* KernelCache::column(int column, const std::vector<int>& active, bool full) {
-  const bool all_active = active.size() == size_;
-  int slot = slot_of_[column];
+const double* KernelCache::column(int position, int length) {
+  const int sample = kernel_.sample_at(static_cast<std::size_t>(position));
+  int slot = slot_of_[sample];
   if (slot >= 0) {
-    unlink(column);
-    touch(column);
-    const bool valid = epoch_of_[column] < 0 || (!full && epoch_of_[column] == epoch_);
-    if (valid) return slots_[slot].get();
+    unlink(sample);
+    touch(sample);
+    if (length_of_slot_[slot] >= length) return slots_[slot].get();
   } else {
     if (slots_.size() < capacity_) {
       slot = static_cast<int>(slots_.size());
       slots_.push_back(std::make_unique<double[]>(size_));
-      column_of_slot_.push_back(-1);
+      sample_of_slot_.push_back(-1);
+      length_of_slot_.push_back(0);
     } else {
       const int evicted = next_[size_];  // least recently used
       slot = slot_of_[evicted];
       unlink(evicted);
       slot_of_[evicted] = -1;
     }
-    slot_of_[column] = slot;
-    column_of_slot_[slot] = column;
-    touch(column);
+    slot_of_[sample] = slot;
+    sample_of_slot_[slot] = sample;
+    length_of_slot_[slot] = 0;
+    touch(sample);
   }
   double* data = slots_[slot].get();
-  if (full || all_active) {
-    kernel_.column(static_cast<std::size_t>(column), nullptr, data);
-    epoch_of_[column] = -1;
-  } else {
-    kernel_.column(static_cast<std::size_t>(column), &active, data);
-    epoch_of_[column] = epoch_;
-  }
+  kernel_.column(static_cast<std::size_t>(position), static_cast<std::size_t>(length_of_slot_[slot]),
+                 static_cast<std::size_t>(length), data);
+  length_of_slot_[slot] = length;
   ++columns_computed_;
   return data;
+}
+
+void KernelCache::swap(const std::vector<std::pair<int, int>>& position_pairs) {
+  if (position_pairs.empty()) return;
+  for (const auto& [a, b] : position_pairs) kernel_.swap(static_cast<std::size_t>(a), static_cast<std::size_t>(b));
+  // Column by column, so that each column is walked once. Pairs are applied in order; an
+  // entry that moves into a column's valid prefix from beyond it is computed afresh.
+  for (std::size_t slot = 0; slot < slots_.size(); ++slot) {
+    const int length = length_of_slot_[slot];
+    if (length == 0) continue;
+    double* data = slots_[slot].get();
+    bool needs_fresh = false;
+    for (const auto& [a, b] : position_pairs) {
+      const int low = std::min(a, b), high = std::max(a, b);
+      if (high < length) std::swap(data[low], data[high]);
+      else if (low < length) needs_fresh = true;
+    }
+    if (needs_fresh) length_of_slot_[slot] = 0;  // rare: columns span the active set
+
+  }
 }
 
 }  // namespace thermodrift::svr_detail

@@ -1,5 +1,6 @@
 // Internal to the ε-SVR solver: a small pool of worker threads, the RBF kernel over an
-// SvrDataset, and the LRU cache of kernel columns with a byte budget.
+// SvrDataset in the solver's permuted order, and the LRU cache of kernel columns with a
+// byte budget.
 #pragma once
 
 #include <condition_variable>
@@ -8,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "thermodrift/models/svr.hpp"
@@ -41,53 +43,59 @@ class WorkerPool {
   bool stopping_ = false;
 };
 
-// K(a, b) = exp(-gamma ||x_a - x_b||²) over the samples of a data set.
+// K(a, b) = exp(-gamma ||x_a - x_b||²) over the samples of a data set, addressed by
+// *position*: the solver keeps its active samples at positions [0, active) (as libsvm's
+// swap_index) so that its per-step loops run over plain arrays. The kernel keeps the
+// samples feature-major in position order; swap() moves two samples.
 class RbfKernel {
  public:
   RbfKernel(const SvrDataset& data, double gamma, WorkerPool& pool);
 
   std::size_t size() const { return size_; }
-  double operator()(std::size_t a, std::size_t b) const;
-  // out[r] = K(r, column) for every r in `rows`, or for all r when rows is null.
-  void column(std::size_t column, const std::vector<int>* rows, double* out) const;
+  int sample_at(std::size_t position) const { return order_[position]; }
+  // out[p] = K(p, center) for p in [begin, end) (positions), on `pool` when long.
+  void column(std::size_t center, std::size_t begin, std::size_t end, double* out) const;
+  // The same on the calling thread only.
+  void column_serial(std::size_t center, std::size_t begin, std::size_t end, double* out) const;
+  void swap(std::size_t position_a, std::size_t position_b);
 
  private:
-  void column_range(std::size_t column, const std::vector<int>* rows, std::size_t begin,
-                    std::size_t end, double* out) const;
 
   const SvrDataset& data_;
   double gamma_;
   std::size_t size_;
   WorkerPool& pool_;
+  std::vector<int> order_;                   // sample at each position
+  std::vector<std::vector<double>> features_;  // features_[f][p]: feature f of the sample at p
 };
 
 // Columns of the kernel matrix, least recently used evicted first, within a byte
-// budget (at least two columns: the solver holds the pair of its working set).
-// A column may be computed only on the active rows; such a column stays valid until
-// the active set grows again (a new "epoch"), as shrinking only removes rows.
+// budget (at least two columns: the solver holds the pair of its working set). A column
+// belongs to a sample; its entries are in position order and valid on [0, length). A
+// request for a longer prefix computes only the missing entries (after unshrinking).
 class KernelCache {
  public:
-  KernelCache(const RbfKernel& kernel, double budget_mb);
+  KernelCache(RbfKernel& kernel, double budget_mb);
 
-  // Column `column`, valid on every row in `active` (on all rows if `full`).
-  const double* column(int column, const std::vector<int>& active, bool full);
-  void start_epoch() { ++epoch_; }
+  // Column of the sample at `position`, valid on positions [0, length).
+  const double* column(int position, int length);
+  // Exchanges positions a and b in the kernel and in every cached column.
+  void swap(const std::vector<std::pair<int, int>>& position_pairs);
   std::size_t columns_computed() const { return columns_computed_; }
   std::size_t capacity() const { return capacity_; }
 
  private:
-  void touch(int column);  // move to the most-recently-used end
-  void unlink(int column);
+  void touch(int sample);  // move to the most-recently-used end
+  void unlink(int sample);
 
-  const RbfKernel& kernel_;
+  RbfKernel& kernel_;
   std::size_t size_;
   std::size_t capacity_;                        // columns that fit the budget
   std::vector<std::unique_ptr<double[]>> slots_;
-  std::vector<int> slot_of_;                    // per column: slot or -1
-  std::vector<int> column_of_slot_;
-  std::vector<long> epoch_of_;                  // per column: epoch when computed partially, -1 when full
-  std::vector<int> previous_, next_;            // LRU list over columns; sentinel = size_
-  long epoch_ = 0;
+  std::vector<int> slot_of_;                    // per sample: slot or -1
+  std::vector<int> length_of_slot_;             // valid prefix of each slot
+  std::vector<int> sample_of_slot_;
+  std::vector<int> previous_, next_;            // LRU list over samples; sentinel = size_
   std::size_t columns_computed_ = 0;
 };
 

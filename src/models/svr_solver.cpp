@@ -22,11 +22,19 @@
 // two variables sit at bounds that cannot move (libsvm's rule); the residual of dropped
 // samples is rebuilt from the "bounded part" Kβ_C (columns of variables at C, kept up to
 // date) plus the free variables when they come back.
+//
+// Layout: every per-sample array is indexed by *position*, with the active samples at
+// positions [0, active) (shrinking swaps a dropped sample to the end, as libsvm's
+// swap_index), so the two per-step sweeps (residual update with the argmax for the next
+// i; selection of j) run over contiguous arrays. They are written with GCC vector types
+// and compiled twice (AVX2 and baseline x86-64, chosen at load time by target_clones).
 #include "svr_solver.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace thermodrift::svr_detail {
@@ -36,83 +44,204 @@ namespace {
 constexpr double kTau = 1e-12;  // curvature used when K_ii + K_jj - 2K_ij ≤ 0
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-// One of the 2n variables: half 0 is α_sample (y = +1), half 1 is α*_sample (y = -1).
+// ---------------------------------------------------------------------------- sweeps
+
+// GCC warns that these types change the ABI of non-AVX functions; they never cross one.
+#pragma GCC diagnostic ignored "-Wpsabi"
+// Four doubles and a lane mask; on the baseline target GCC splits them into SSE2 pairs.
+typedef double Lanes __attribute__((vector_size(32)));
+typedef long long LaneMask __attribute__((vector_size(32)));
+constexpr int kLanes = 4;
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define THERMODRIFT_SWEEP __attribute__((target_clones("avx2", "default")))
+#else
+#define THERMODRIFT_SWEEP
+#endif
+
+inline Lanes load(const double* from) {
+  Lanes lanes;
+  std::memcpy(&lanes, from, sizeof lanes);
+  return lanes;
+}
+inline void store(double* to, Lanes lanes) { std::memcpy(to, &lanes, sizeof lanes); }
+
+struct Argmax {
+  double value = -kInfinity;
+  int position = -1;
+};
+
+// r_p -= change_i K_pi + change_j K_pj on [0, count); returns argmax_p r_p + up_offset_p
+// (the first position on ties, as a scalar scan).
+THERMODRIFT_SWEEP
+Argmax update_residual(double* residual, const double* up_offset, const double* column_i, const double* column_j,
+                       double change_i, double change_j, int count) {
+  Lanes best = {-kInfinity, -kInfinity, -kInfinity, -kInfinity};
+  LaneMask best_position = {-1, -1, -1, -1};
+  LaneMask position = {0, 1, 2, 3};
+  int p = 0;
+  for (; p + kLanes <= count; p += kLanes) {
+    const Lanes r = load(residual + p) - change_i * load(column_i + p) - change_j * load(column_j + p);
+    store(residual + p, r);
+    const Lanes value = r + load(up_offset + p);
+    const LaneMask better = value > best;
+    best = better ? value : best;
+    best_position = better ? position : best_position;
+    position += kLanes;
+  }
+  Argmax result;
+  for (int lane = 0; lane < kLanes; ++lane) {
+    const int at = static_cast<int>(best_position[lane]);
+    if (at >= 0 && (best[lane] > result.value || (best[lane] == result.value && at < result.position))) {
+      result.value = best[lane];
+      result.position = at;
+    }
+  }
+  for (; p < count; ++p) {
+    const double r = residual[p] - change_i * column_i[p] - change_j * column_j[p];
+    residual[p] = r;
+    const double value = r + up_offset[p];
+    if (value > result.value) {
+      result.value = value;
+      result.position = p;
+    }
+  }
+  return result;
+}
+
+struct SecondChoice {
+  int position = -1;
+  double smallest_low = kInfinity;  // M(a)
+};
+
+// Second-order choice of j for a given m(a) = largest_up and the column of i: maximises
+// (m - v_p)² / (2 - 2 K_pi) over v_p = r_p + low_offset_p < m; also returns min_p v_p.
+// Scores are compared as cross products (gap² · curvature' > gap'² · curvature).
+THERMODRIFT_SWEEP
+SecondChoice select_second(const double* residual, const double* low_offset, const double* column_i,
+                           double largest_up, int count) {
+  Lanes smallest = {kInfinity, kInfinity, kInfinity, kInfinity};
+  Lanes best_gain = {0, 0, 0, 0};        // gap², per lane
+  Lanes best_curvature = {1, 1, 1, 1};   // its curvature
+  LaneMask best_position = {-1, -1, -1, -1};
+  LaneMask position = {0, 1, 2, 3};
+  const Lanes tau = {kTau, kTau, kTau, kTau};
+  const Lanes zero = {0, 0, 0, 0};
+  int p = 0;
+  for (; p + kLanes <= count; p += kLanes) {
+    const Lanes value = load(residual + p) + load(low_offset + p);
+    smallest = value < smallest ? value : smallest;
+    const Lanes gap = largest_up - value;
+    Lanes curvature = 2.0 - 2.0 * load(column_i + p);
+    curvature = curvature > zero ? curvature : tau;
+    const Lanes gain = gap * gap;
+    const LaneMask better = (gap > zero) & (gain * best_curvature > best_gain * curvature);
+    best_gain = better ? gain : best_gain;
+    best_curvature = better ? curvature : best_curvature;
+    best_position = better ? position : best_position;
+    position += kLanes;
+  }
+  SecondChoice result;
+  double gain = 0, curvature_of_best = 1;
+  for (int lane = 0; lane < kLanes; ++lane) {
+    result.smallest_low = std::min(result.smallest_low, smallest[lane]);
+    const int at = static_cast<int>(best_position[lane]);
+    if (at < 0) continue;
+    const double left = best_gain[lane] * curvature_of_best, right = gain * best_curvature[lane];
+    if (left > right || (left == right && (result.position < 0 || at < result.position))) {
+      gain = best_gain[lane];
+      curvature_of_best = best_curvature[lane];
+      result.position = at;
+    }
+  }
+  for (; p < count; ++p) {
+    const double value = residual[p] + low_offset[p];
+    result.smallest_low = std::min(result.smallest_low, value);
+    const double gap = largest_up - value;
+    double curvature = 2.0 - 2.0 * column_i[p];
+    curvature = curvature > 0 ? curvature : kTau;
+    if (gap > 0 && gap * gap * curvature_of_best > gain * curvature) {
+      gain = gap * gap;
+      curvature_of_best = curvature;
+      result.position = p;
+    }
+  }
+  return result;
+}
+
+// ---------------------------------------------------------------------------- solver
+
+// One of the 2n variables: half 0 is α (y = +1), half 1 is α* (y = -1) of the sample
+// at `position`.
 struct Variable {
-  int sample = -1;
+  int position = -1;
   int half = 0;
   double sign() const { return half == 0 ? 1.0 : -1.0; }
 };
 
 class SvrSmo {
  public:
-  SvrSmo(const Eigen::VectorXd& targets, const SmoSettings& settings, const RbfKernel& kernel,
-         KernelCache& cache, WorkerPool& pool)
+  SvrSmo(const Eigen::VectorXd& targets, const SmoSettings& settings, RbfKernel& kernel, KernelCache& cache,
+         WorkerPool& pool)
       : size_(static_cast<int>(targets.size())),
-        targets_(targets),
         C_(settings.C),
         epsilon_(settings.epsilon),
         settings_(settings),
         kernel_(kernel),
         cache_(cache),
         pool_(pool),
+        target_(size_),
         alpha_(size_, 0.0),
         alpha_star_(size_, 0.0),
         residual_(size_),
         bounded_part_(size_, 0.0),
         up_offset_(size_),
-        low_offset_(size_) {
-    active_.resize(size_);
-    for (int sample = 0; sample < size_; ++sample) active_[sample] = sample;
+        low_offset_(size_),
+        active_size_(size_) {
+    for (int position = 0; position < size_; ++position) target_[position] = targets(kernel_.sample_at(position));
   }
 
   void start_from(const Eigen::VectorXd& alpha, const Eigen::VectorXd& alpha_star);
   SmoSolution solve();
 
  private:
-  void refresh_offsets(int sample) {
-    const double a = alpha_[sample], a_star = alpha_star_[sample];
-    up_offset_[sample] = a_star > 0 ? epsilon_ : (a < C_ ? -epsilon_ : -kInfinity);
-    low_offset_[sample] = a > 0 ? -epsilon_ : (a_star < C_ ? epsilon_ : kInfinity);
+  void refresh_offsets(int position) {
+    const double a = alpha_[position], a_star = alpha_star_[position];
+    up_offset_[position] = a_star > 0 ? epsilon_ : (a < C_ ? -epsilon_ : -kInfinity);
+    low_offset_[position] = a > 0 ? -epsilon_ : (a_star < C_ ? epsilon_ : kInfinity);
   }
-  // Calls body(sample) for every active sample; a plain counted loop when all are active.
-  template <typename Body>
-  void for_active(Body&& body) const {
-    if (all_active()) {
-      for (int sample = 0; sample < size_; ++sample) body(sample);
-    } else {
-      for (int sample : active_) body(sample);
-    }
-  }
-  double& value_of(Variable v) { return v.half == 0 ? alpha_[v.sample] : alpha_star_[v.sample]; }
-  bool all_active() const { return static_cast<int>(active_.size()) == size_; }
+  double& value_of(Variable v) { return v.half == 0 ? alpha_[v.position] : alpha_star_[v.position]; }
+  bool all_active() const { return active_size_ == size_; }
   void find_first();
   bool select_working_set(Variable* first, Variable* second);
   void take_step(Variable first, Variable second);
   void shrink();
+  void swap_positions(int a, int b);
   void reconstruct_residual();
   void activate_all();
-  std::pair<double, double> violation_bounds(const std::vector<int>& samples) const;
+  std::pair<double, double> violation_bounds(int count) const;
 
   int size_;
-  const Eigen::VectorXd& targets_;
   double C_;
   double epsilon_;
   SmoSettings settings_;
-  const RbfKernel& kernel_;
+  RbfKernel& kernel_;
   KernelCache& cache_;
   WorkerPool& pool_;
 
+  // All per position (kernel_.sample_at(position) is the sample).
+  std::vector<double> target_;
   std::vector<double> alpha_;
   std::vector<double> alpha_star_;
-  std::vector<double> residual_;      // z - Kβ, up to date on active samples
-  std::vector<double> bounded_part_;  // K β_C, β_C = C·[α = C] - C·[α* = C], on all samples
-  // Per sample, the offset of its best I_up candidate from r (max over its two halves of
-  // -y G - r: +ε if α* > 0, else -ε if α < C, else -∞) and of its best I_low candidate
-  // (min of -y G - r: -ε if α > 0, else +ε if α* < C, else +∞). The selection loops read
-  // one number per sample instead of testing both halves.
+  std::vector<double> residual_;      // z - Kβ, up to date on active positions
+  std::vector<double> bounded_part_;  // K β_C, β_C = C·[α = C] - C·[α* = C], on all positions
+  // Per position, the offset of its best I_up candidate from r (max over its two halves
+  // of -y G - r: +ε if α* > 0, else -ε if α < C, else -∞) and of its best I_low candidate
+  // (min of -y G - r: -ε if α > 0, else +ε if α* < C, else +∞). The sweeps read one
+  // number per sample instead of testing both halves.
   std::vector<double> up_offset_;
   std::vector<double> low_offset_;
-  std::vector<int> active_;           // samples in the working problem, ascending
+  int active_size_;                   // active samples sit at positions [0, active_size_)
   bool unshrunk_ = false;
 
   // The first variable of the next working set, found while updating the residual.
@@ -122,17 +251,18 @@ class SvrSmo {
 };
 
 void SvrSmo::start_from(const Eigen::VectorXd& alpha, const Eigen::VectorXd& alpha_star) {
-  for (int sample = 0; sample < size_; ++sample) {
-    alpha_[sample] = alpha(sample);
-    alpha_star_[sample] = alpha_star(sample);
-    refresh_offsets(sample);
+  for (int position = 0; position < size_; ++position) {
+    const int sample = kernel_.sample_at(position);
+    alpha_[position] = alpha(sample);
+    alpha_star_[position] = alpha_star(sample);
+    refresh_offsets(position);
+    residual_[position] = target_[position];
   }
-  for (int sample = 0; sample < size_; ++sample) residual_[sample] = targets_(sample);
-  for (int sample = 0; sample < size_; ++sample) {
-    const double beta = alpha_[sample] - alpha_star_[sample];
-    const double bounded = (alpha_[sample] >= C_ ? C_ : 0.0) - (alpha_star_[sample] >= C_ ? C_ : 0.0);
+  for (int position = 0; position < size_; ++position) {
+    const double beta = alpha_[position] - alpha_star_[position];
+    const double bounded = (alpha_[position] >= C_ ? C_ : 0.0) - (alpha_star_[position] >= C_ ? C_ : 0.0);
     if (beta == 0 && bounded == 0) continue;
-    const double* column = cache_.column(sample, active_, true);
+    const double* column = cache_.column(position, size_);
     for (int row = 0; row < size_; ++row) {
       residual_[row] -= beta * column[row];
       bounded_part_[row] += bounded * column[row];
@@ -140,32 +270,30 @@ void SvrSmo::start_from(const Eigen::VectorXd& alpha, const Eigen::VectorXd& alp
   }
 }
 
-// m(a) = max over I_up of -y G, and M(a) = min over I_low of -y G, over `samples`.
-std::pair<double, double> SvrSmo::violation_bounds(const std::vector<int>& samples) const {
+// m(a) = max over I_up of -y G, and M(a) = min over I_low of -y G, over positions [0, count).
+std::pair<double, double> SvrSmo::violation_bounds(int count) const {
   double largest_up = -kInfinity;
   double smallest_low = kInfinity;
-  for (int sample : samples) {
-    const double r = residual_[sample];
-    if (alpha_[sample] < C_) largest_up = std::max(largest_up, r - epsilon_);
-    if (alpha_star_[sample] > 0) largest_up = std::max(largest_up, r + epsilon_);
-    if (alpha_[sample] > 0) smallest_low = std::min(smallest_low, r - epsilon_);
-    if (alpha_star_[sample] < C_) smallest_low = std::min(smallest_low, r + epsilon_);
+  for (int position = 0; position < count; ++position) {
+    const double r = residual_[position];
+    largest_up = std::max(largest_up, r + up_offset_[position]);
+    smallest_low = std::min(smallest_low, r + low_offset_[position]);
   }
   return {largest_up, smallest_low};
 }
 
 void SvrSmo::find_first() {
   double best = -kInfinity;
-  int best_sample = -1;
-  for_active([&](int sample) {
-    const double value = residual_[sample] + up_offset_[sample];
+  int best_position = -1;
+  for (int position = 0; position < active_size_; ++position) {
+    const double value = residual_[position] + up_offset_[position];
     if (value > best) {
       best = value;
-      best_sample = sample;
+      best_position = position;
     }
-  });
+  }
   first_value_ = best;
-  first_ = best_sample < 0 ? Variable{} : Variable{best_sample, alpha_star_[best_sample] > 0 ? 1 : 0};
+  first_ = best_position < 0 ? Variable{} : Variable{best_position, alpha_star_[best_position] > 0 ? 1 : 0};
   first_known_ = true;
 }
 
@@ -174,35 +302,20 @@ bool SvrSmo::select_working_set(Variable* first, Variable* second) {
   if (!first_known_) find_first();
   const double largest_up = first_value_;  // m(a)
   *first = first_;
-  if (first_.sample < 0) return true;
-  const double* first_column = cache_.column(first_.sample, active_, false);
-
+  if (first_.position < 0) return true;
+  const double* first_column = cache_.column(first_.position, active_size_);
   // For each sample only its I_low half with the smaller -y G can win: both share the
   // curvature K_ii + K_jj - 2 K_ij = 2 - 2 K_ij (K_ii = 1) and the larger gap wins.
-  double smallest_low = kInfinity;  // M(a)
-  double best_score = 0;            // (m - v)² / curvature, the decrease of the objective
-  int best_sample = -1;
-  const double* residual = residual_.data();
-  const double* low_offset = low_offset_.data();
-  for_active([&](int sample) {
-    const double value = residual[sample] + low_offset[sample];
-    smallest_low = std::min(smallest_low, value);
-    const double gap = largest_up - value;
-    double curvature = 2.0 - 2.0 * first_column[sample];
-    curvature = curvature > 0 ? curvature : kTau;
-    if (gap > 0 && gap * gap > best_score * curvature) {  // score > best, without a division
-      best_score = gap * gap / curvature;
-      best_sample = sample;
-    }
-  });
-  *second = best_sample < 0 ? Variable{} : Variable{best_sample, alpha_[best_sample] > 0 ? 0 : 1};
-  return largest_up - smallest_low < settings_.tolerance || second->sample < 0;
+  const SecondChoice choice =
+      select_second(residual_.data(), low_offset_.data(), first_column, largest_up, active_size_);
+  *second = choice.position < 0 ? Variable{} : Variable{choice.position, alpha_[choice.position] > 0 ? 0 : 1};
+  return largest_up - choice.smallest_low < settings_.tolerance || second->position < 0;
 }
 
 // Solves the two-variable subproblem in (first, second) exactly and updates the residual.
 void SvrSmo::take_step(Variable first, Variable second) {
-  const double* first_column = cache_.column(first.sample, active_, false);
-  const double* second_column = cache_.column(second.sample, active_, false);
+  const double* first_column = cache_.column(first.position, active_size_);
+  const double* second_column = cache_.column(second.position, active_size_);
   // the second fetch cannot evict the first: the cache holds at least two columns
   double& a_i = value_of(first);
   double& a_j = value_of(second);
@@ -210,9 +323,9 @@ void SvrSmo::take_step(Variable first, Variable second) {
   const double old_j = a_j;
   const double y_i = first.sign();
   const double y_j = second.sign();
-  const double q_ij = y_i * y_j * first_column[second.sample];
-  const double gradient_i = epsilon_ - y_i * residual_[first.sample];
-  const double gradient_j = epsilon_ - y_j * residual_[second.sample];
+  const double q_ij = y_i * y_j * first_column[second.position];
+  const double gradient_i = epsilon_ - y_i * residual_[first.position];
+  const double gradient_j = epsilon_ - y_j * residual_[second.position];
   const double C = C_;
 
   if (y_i != y_j) {
@@ -251,32 +364,19 @@ void SvrSmo::take_step(Variable first, Variable second) {
     }
   }
 
-  // r -= K Δβ on the active samples, finding the next first variable on the way.
+  // r -= K Δβ on the active positions, finding the next first variable on the way.
   double change_i = y_i * (a_i - old_i);
   double change_j = y_j * (a_j - old_j);
-  if (first.sample == second.sample) {
+  if (first.position == second.position) {
     change_i += change_j;
     change_j = 0;
   }
-  refresh_offsets(first.sample);
-  refresh_offsets(second.sample);
-  double* residual = residual_.data();
-  const double* up_offset = up_offset_.data();
-  double best = -kInfinity;
-  int best_sample = -1;
-  for_active([&](int sample) {
-    const double r = residual[sample] - change_i * first_column[sample] - change_j * second_column[sample];
-    residual[sample] = r;
-    const double value = r + up_offset[sample];
-    if (value > best) {
-      best = value;
-      best_sample = sample;
-    }
-  });
-  const Variable best_variable =
-      best_sample < 0 ? Variable{} : Variable{best_sample, alpha_star_[best_sample] > 0 ? 1 : 0};
-  first_ = best_variable;
-  first_value_ = best;
+  refresh_offsets(first.position);
+  refresh_offsets(second.position);
+  const Argmax best = update_residual(residual_.data(), up_offset_.data(), first_column, second_column, change_i,
+                                      change_j, active_size_);
+  first_ = best.position < 0 ? Variable{} : Variable{best.position, alpha_star_[best.position] > 0 ? 1 : 0};
+  first_value_ = best.value;
   first_known_ = true;
 
   // Keep K β_C current when a variable reaches or leaves C (needs the whole column).
@@ -285,68 +385,81 @@ void SvrSmo::take_step(Variable first, Variable second) {
     const bool is_at_c = after >= C;
     if (was_at_c == is_at_c) return;
     const double change = (is_at_c ? C : -C) * v.sign();
-    const double* column = cache_.column(v.sample, active_, true);
-    for (int row = 0; row < size_; ++row) bounded_part_[row] += change * column[row];
+    const double* column = cache_.column(v.position, size_);
+    double* bounded_part = bounded_part_.data();
+    for (int row = 0; row < size_; ++row) bounded_part[row] += change * column[row];
   };
   follow_bound(first, old_i, a_i);
   follow_bound(second, old_j, a_j);
 }
 
-// Rebuilds r = z - K β_C - K β_free on the samples outside the active set.
+// Rebuilds r = z - K β_C - K β_free on the positions outside the active set.
 void SvrSmo::reconstruct_residual() {
   if (all_active()) return;
-  std::vector<char> is_active(size_, 0);
-  for (int sample : active_) is_active[sample] = 1;
-  std::vector<int> inactive;
-  for (int sample = 0; sample < size_; ++sample)
-    if (!is_active[sample]) inactive.push_back(sample);
-  std::vector<int> free_samples;
+  std::vector<int> free_positions;
   std::vector<double> free_beta;
-  for (int sample = 0; sample < size_; ++sample) {
-    const double a = alpha_[sample];
-    const double a_star = alpha_star_[sample];
+  for (int position = 0; position < size_; ++position) {
+    const double a = alpha_[position];
+    const double a_star = alpha_star_[position];
     const double beta = (a > 0 && a < C_ ? a : 0.0) - (a_star > 0 && a_star < C_ ? a_star : 0.0);
     if (beta != 0) {
-      free_samples.push_back(sample);
+      free_positions.push_back(position);
       free_beta.push_back(beta);
     }
   }
+  const auto first_inactive = static_cast<std::size_t>(active_size_);
+  const std::size_t inactive = static_cast<std::size_t>(size_) - first_inactive;
+  // Each thread takes a range of inactive positions and walks the free variables with
+  // one vectorised kernel evaluation per (free variable, range).
   auto rebuild = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t k = begin; k < end; ++k) {
-      const int sample = inactive[k];
-      double sum = bounded_part_[sample];
-      for (std::size_t f = 0; f < free_samples.size(); ++f)
-        sum += free_beta[f] * kernel_(static_cast<std::size_t>(sample), static_cast<std::size_t>(free_samples[f]));
-      residual_[sample] = targets_(sample) - sum;
+    begin += first_inactive;
+    end += first_inactive;
+    std::vector<double> column(static_cast<std::size_t>(size_));
+    std::vector<double> sum(bounded_part_.begin() + static_cast<std::ptrdiff_t>(begin),
+                            bounded_part_.begin() + static_cast<std::ptrdiff_t>(end));
+    for (std::size_t f = 0; f < free_positions.size(); ++f) {
+      kernel_.column_serial(static_cast<std::size_t>(free_positions[f]), begin, end, column.data());
+      const double beta = free_beta[f];
+      for (std::size_t position = begin; position < end; ++position) sum[position - begin] += beta * column[position];
     }
+    for (std::size_t position = begin; position < end; ++position)
+      residual_[position] = target_[position] - sum[position - begin];
   };
-  if (inactive.size() * free_samples.size() > 100'000) {
-    pool_.run(inactive.size(), rebuild);
+  if (inactive * free_positions.size() > 100'000) {
+    pool_.run(inactive, rebuild);
   } else {
-    rebuild(0, inactive.size());
+    rebuild(0, inactive);
   }
 }
 
 void SvrSmo::activate_all() {
   if (all_active()) return;
-  active_.resize(size_);
-  for (int sample = 0; sample < size_; ++sample) active_[sample] = sample;
-  cache_.start_epoch();
+  active_size_ = size_;
   first_known_ = false;
 }
 
+void SvrSmo::swap_positions(int a, int b) {
+  std::swap(target_[a], target_[b]);
+  std::swap(alpha_[a], alpha_[b]);
+  std::swap(alpha_star_[a], alpha_star_[b]);
+  std::swap(residual_[a], residual_[b]);
+  std::swap(bounded_part_[a], bounded_part_[b]);
+  std::swap(up_offset_[a], up_offset_[b]);
+  std::swap(low_offset_[a], low_offset_[b]);
+}
+
 void SvrSmo::shrink() {
-  const auto [largest_up, smallest_low] = violation_bounds(active_);
+  const auto [largest_up, smallest_low] = violation_bounds(active_size_);
   if (!unshrunk_ && largest_up - smallest_low <= 10 * settings_.tolerance) {
     // Close to the end: bring every sample back once, so that the final checks see them.
     unshrunk_ = true;
     reconstruct_residual();
     activate_all();
   }
-  auto stays = [&](int sample) {
-    const double r = residual_[sample];
-    const double a = alpha_[sample];
-    const double a_star = alpha_star_[sample];
+  auto stays = [&](int position) {
+    const double r = residual_[position];
+    const double a = alpha_[position];
+    const double a_star = alpha_star_[position];
     bool fixed_alpha = false;  // α cannot move in the next steps
     if (a >= C_) fixed_alpha = r - epsilon_ > largest_up;
     else if (a <= 0) fixed_alpha = r - epsilon_ < smallest_low;
@@ -355,12 +468,26 @@ void SvrSmo::shrink() {
     else if (a_star <= 0) fixed_alpha_star = r + epsilon_ > largest_up;
     return !(fixed_alpha && fixed_alpha_star);
   };
-  std::vector<int> kept;
-  kept.reserve(active_.size());
-  for (int sample : active_)
-    if (stays(sample)) kept.push_back(sample);
-  if (kept.size() != active_.size()) {
-    active_.swap(kept);
+  // Dropped samples go to the end: each is exchanged with the last staying one.
+  std::vector<std::pair<int, int>> exchanges;
+  int end = active_size_;
+  int position = 0;
+  while (position < end) {
+    if (stays(position)) {
+      ++position;
+      continue;
+    }
+    --end;
+    while (end > position && !stays(end)) --end;
+    if (end > position) {
+      swap_positions(position, end);
+      exchanges.emplace_back(position, end);
+      ++position;
+    }
+  }
+  cache_.swap(exchanges);
+  if (end != active_size_) {
+    active_size_ = end;
     first_known_ = false;
   }
 }
@@ -394,9 +521,7 @@ SmoSolution SvrSmo::solve() {
     activate_all();
   }
 
-  std::vector<int> everyone(size_);
-  for (int sample = 0; sample < size_; ++sample) everyone[sample] = sample;
-  const auto [largest_up, smallest_low] = violation_bounds(everyone);
+  const auto [largest_up, smallest_low] = violation_bounds(size_);
   solution.max_violation = std::max(0.0, largest_up - smallest_low);
   // An exact zero of the loop's test can also end a capped run.
   solution.converged = converged || solution.max_violation < settings_.tolerance;
@@ -406,11 +531,13 @@ SmoSolution SvrSmo::solve() {
   double upper = kInfinity, lower = -kInfinity, free_sum = 0;
   long free_count = 0;
   double twice_objective = 0;
-  for (int sample = 0; sample < size_; ++sample) {
-    const double r = residual_[sample];
-    const double z = targets_(sample);
-    const double a = alpha_[sample];
-    const double a_star = alpha_star_[sample];
+  solution.alpha.resize(size_);
+  solution.alpha_star.resize(size_);
+  for (int position = 0; position < size_; ++position) {
+    const double r = residual_[position];
+    const double z = target_[position];
+    const double a = alpha_[position];
+    const double a_star = alpha_star_[position];
     const double y_gradient = epsilon_ - r;         // α:  y = +1, G = ε - r
     const double y_gradient_star = -epsilon_ - r;  // α*: y = -1, G = ε + r
     if (a >= C_) lower = std::max(lower, y_gradient);
@@ -421,18 +548,19 @@ SmoSolution SvrSmo::solve() {
     else { ++free_count; free_sum += y_gradient_star; }
     // a_t (G_t + p_t)
     twice_objective += a * (2 * epsilon_ - r - z) + a_star * (2 * epsilon_ + r + z);
+    const int sample = kernel_.sample_at(position);
+    solution.alpha(sample) = a;
+    solution.alpha_star(sample) = a_star;
   }
   solution.rho = free_count > 0 ? free_sum / static_cast<double>(free_count) : (upper + lower) / 2;
   solution.objective = twice_objective / 2;
-  solution.alpha = Eigen::Map<const Eigen::VectorXd>(alpha_.data(), size_);
-  solution.alpha_star = Eigen::Map<const Eigen::VectorXd>(alpha_star_.data(), size_);
   return solution;
 }
 
 }  // namespace
 
 SmoSolution solve_svr_dual(const Eigen::VectorXd& targets, const SmoSettings& settings,
-                           const RbfKernel& kernel, KernelCache& cache, WorkerPool& pool,
+                           RbfKernel& kernel, KernelCache& cache, WorkerPool& pool,
                            const Eigen::VectorXd* alpha, const Eigen::VectorXd* alpha_star) {
   SvrSmo smo(targets, settings, kernel, cache, pool);
   if (alpha && alpha_star) {

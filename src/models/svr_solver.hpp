@@ -27,9 +27,9 @@ struct SmoSolution {
 
 // Solves the ε-SVR dual for `targets` (docs/svr.md and the comment in svr_solver.cpp).
 // Starts from (alpha, alpha_star) when given; they must be feasible: in [0, C] and with
-// Σ α_i - α_i^* = 0.
+// Σ α_i - α_i^* = 0. Permutes the kernel's positions (the solution is in sample order).
 SmoSolution solve_svr_dual(const Eigen::VectorXd& targets, const SmoSettings& settings,
-                           const RbfKernel& kernel, KernelCache& cache, WorkerPool& pool,
+                           RbfKernel& kernel, KernelCache& cache, WorkerPool& pool,
                            const Eigen::VectorXd* alpha = nullptr,
                            const Eigen::VectorXd* alpha_star = nullptr);
 
