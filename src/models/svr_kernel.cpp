@@ -1,5 +1,7 @@
 #include "svr_kernel.hpp"
 
+#include "svr_simd.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -103,26 +105,77 @@ void RbfKernel::column(std::size_t center, std::size_t begin, std::size_t end, d
   }
 }
 
+namespace {
+
+// values[p] = exp(-gamma values[p]) for values ≥ 0, in place: exp(x) = 2^k exp(x - k ln 2)
+// with k = round(x / ln 2) and a degree-13 Taylor polynomial on |x - k ln 2| ≤ ln2/2
+// (truncation below 1e-17 relative; a few ulp overall). Lane-wise, so an entry's value
+// does not depend on where in a range it sits: the tail is padded to a whole vector.
+THERMODRIFT_SIMD_CLONES
+void negative_exp(double* values, std::size_t count, double gamma) {
+  using simd::Lanes;
+  using simd::LaneMask;
+  using simd::broadcast;
+  const Lanes log2e = broadcast(1.4426950408889634);
+  const Lanes ln2_high = broadcast(6.93145751953125e-1);
+  const Lanes ln2_low = broadcast(1.42860682030941723212e-6);
+  const Lanes round_magic = broadcast(6755399441055744.0);  // 1.5·2^52: adding it rounds to an integer
+  const Lanes underflow = broadcast(-708.0);
+  const Lanes zero = broadcast(0.0);
+  const Lanes factor = broadcast(-gamma);
+  auto exp_lanes = [&](Lanes squared) {
+    const Lanes x = squared * factor;
+    const Lanes k = (x * log2e + round_magic) - round_magic;
+    const Lanes r = (x - k * ln2_high) - k * ln2_low;
+    Lanes p = broadcast(1.0 / 6227020800.0);  // 1/13!
+    p = p * r + 1.0 / 479001600.0;
+    p = p * r + 1.0 / 39916800.0;
+    p = p * r + 1.0 / 3628800.0;
+    p = p * r + 1.0 / 362880.0;
+    p = p * r + 1.0 / 40320.0;
+    p = p * r + 1.0 / 5040.0;
+    p = p * r + 1.0 / 720.0;
+    p = p * r + 1.0 / 120.0;
+    p = p * r + 1.0 / 24.0;
+    p = p * r + 1.0 / 6.0;
+    p = p * r + 0.5;
+    p = p * r + 1.0;
+    p = p * r + 1.0;
+    // 2^k from the integer in the low mantissa bits of k + 1023 + 1.5·2^52 (k ≥ -1022 here)
+    const LaneMask exponent = (LaneMask)(k + (round_magic + 1023.0)) << 52;
+    const Lanes result = p * (Lanes)exponent;
+    return x < underflow ? zero : result;
+  };
+  std::size_t p = 0;
+  for (; p + simd::kLanes <= count; p += simd::kLanes) simd::store(values + p, exp_lanes(simd::load(values + p)));
+  if (p < count) {
+    double tail[simd::kLanes] = {0, 0, 0, 0};
+    std::memcpy(tail, values + p, (count - p) * sizeof(double));
+    simd::store(tail, exp_lanes(simd::load(tail)));
+    std::memcpy(values + p, tail, (count - p) * sizeof(double));
+  }
+}
+
+}  // namespace
+
 // Positions [begin, end) of one column: squared distances feature by feature over
-// contiguous memory, then Eigen's vectorised exp. The exp runs on a scratch array padded
-// to whole packets, so that every entry takes the packet path: an entry's value must not
-// depend on the range it was computed in (a column may be computed in pieces).
+// contiguous memory, then a vectorised exp (negative_exp above).
 void RbfKernel::column_serial(std::size_t center, std::size_t begin, std::size_t end, double* out) const {
   if (end <= begin) return;
-  constexpr Eigen::Index kPad = 8;
-  const auto count = static_cast<Eigen::Index>(end - begin);
-  Eigen::ArrayXd scratch = Eigen::ArrayXd::Zero((count + kPad - 1) / kPad * kPad);
   if (data_.has_distances()) {
     const double* distances = data_.squared_distances().col(order_[center]).data();
-    for (Eigen::Index k = 0; k < count; ++k) scratch[k] = distances[order_[begin + static_cast<std::size_t>(k)]];
+    for (std::size_t position = begin; position < end; ++position) out[position] = distances[order_[position]];
   } else {
+    std::fill(out + begin, out + end, 0.0);
     for (const auto& values : features_) {
       const double reference = values[center];
-      scratch.head(count) += (Eigen::Map<const Eigen::ArrayXd>(values.data() + begin, count) - reference).square();
+      for (std::size_t position = begin; position < end; ++position) {
+        const double difference = values[position] - reference;
+        out[position] += difference * difference;
+      }
     }
   }
-  scratch = (scratch * -gamma_).exp();
-  std::copy(scratch.data(), scratch.data() + count, out + begin);
+  negative_exp(out + begin, end - begin, gamma_);
 }
 
 // ---------------------------------------------------------------------------- cache

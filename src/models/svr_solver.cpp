@@ -30,6 +30,8 @@
 // and compiled twice (AVX2 and baseline x86-64, chosen at load time by target_clones).
 #include "svr_solver.hpp"
 
+#include "svr_simd.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -46,25 +48,11 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // ---------------------------------------------------------------------------- sweeps
 
-// GCC warns that these types change the ABI of non-AVX functions; they never cross one.
-#pragma GCC diagnostic ignored "-Wpsabi"
-// Four doubles and a lane mask; on the baseline target GCC splits them into SSE2 pairs.
-typedef double Lanes __attribute__((vector_size(32)));
-typedef long long LaneMask __attribute__((vector_size(32)));
-constexpr int kLanes = 4;
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define THERMODRIFT_SWEEP __attribute__((target_clones("avx2", "default")))
-#else
-#define THERMODRIFT_SWEEP
-#endif
-
-inline Lanes load(const double* from) {
-  Lanes lanes;
-  std::memcpy(&lanes, from, sizeof lanes);
-  return lanes;
-}
-inline void store(double* to, Lanes lanes) { std::memcpy(to, &lanes, sizeof lanes); }
+using simd::Lanes;
+using simd::LaneMask;
+using simd::kLanes;
+using simd::load;
+using simd::store;
 
 struct Argmax {
   double value = -kInfinity;
@@ -73,7 +61,7 @@ struct Argmax {
 
 // r_p -= change_i K_pi + change_j K_pj on [0, count); returns argmax_p r_p + up_offset_p
 // (the first position on ties, as a scalar scan).
-THERMODRIFT_SWEEP
+THERMODRIFT_SIMD_CLONES
 Argmax update_residual(double* residual, const double* up_offset, const double* column_i, const double* column_j,
                        double change_i, double change_j, int count) {
   Lanes best = {-kInfinity, -kInfinity, -kInfinity, -kInfinity};
@@ -117,7 +105,7 @@ struct SecondChoice {
 // Second-order choice of j for a given m(a) = largest_up and the column of i: maximises
 // (m - v_p)² / (2 - 2 K_pi) over v_p = r_p + low_offset_p < m; also returns min_p v_p.
 // Scores are compared as cross products (gap² · curvature' > gap'² · curvature).
-THERMODRIFT_SWEEP
+THERMODRIFT_SIMD_CLONES
 SecondChoice select_second(const double* residual, const double* low_offset, const double* column_i,
                            double largest_up, int count) {
   Lanes smallest = {kInfinity, kInfinity, kInfinity, kInfinity};
