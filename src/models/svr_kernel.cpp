@@ -211,13 +211,14 @@ const double* KernelCache::column(int position, int length) {
   if (slot >= 0) {
     unlink(sample);
     touch(sample);
+    catch_up(slot);
     if (length_of_slot_[slot] >= length) return slots_[slot].get();
   } else {
     if (slots_.size() < capacity_) {
       slot = static_cast<int>(slots_.size());
       slots_.push_back(std::make_unique<double[]>(size_));
-      sample_of_slot_.push_back(-1);
       length_of_slot_.push_back(0);
+      log_position_of_slot_.push_back(0);
     } else {
       const int evicted = next_[size_];  // least recently used
       slot = slot_of_[evicted];
@@ -225,8 +226,8 @@ const double* KernelCache::column(int position, int length) {
       slot_of_[evicted] = -1;
     }
     slot_of_[sample] = slot;
-    sample_of_slot_[slot] = sample;
     length_of_slot_[slot] = 0;
+    log_position_of_slot_[slot] = swap_log_.size();
     touch(sample);
   }
   double* data = slots_[slot].get();
@@ -238,22 +239,29 @@ const double* KernelCache::column(int position, int length) {
 }
 
 void KernelCache::swap(const std::vector<std::pair<int, int>>& position_pairs) {
-  if (position_pairs.empty()) return;
-  for (const auto& [a, b] : position_pairs) kernel_.swap(static_cast<std::size_t>(a), static_cast<std::size_t>(b));
-  // Column by column, so that each column is walked once. Pairs are applied in order; an
-  // entry that moves into a column's valid prefix from beyond it is computed afresh.
-  for (std::size_t slot = 0; slot < slots_.size(); ++slot) {
-    const int length = length_of_slot_[slot];
-    if (length == 0) continue;
-    double* data = slots_[slot].get();
-    bool needs_fresh = false;
-    for (const auto& [a, b] : position_pairs) {
-      const int low = std::min(a, b), high = std::max(a, b);
-      if (high < length) std::swap(data[low], data[high]);
-      else if (low < length) needs_fresh = true;
-    }
-    if (needs_fresh) length_of_slot_[slot] = 0;  // rare: columns span the active set
+  for (const auto& [a, b] : position_pairs) {
+    kernel_.swap(static_cast<std::size_t>(a), static_cast<std::size_t>(b));
+    swap_log_.emplace_back(std::min(a, b), std::max(a, b));
+  }
+}
 
+// Replays the exchanges made since the column was last used. Most cached columns are
+// evicted before they are used again, so they never pay for the exchanges. An entry
+// that moves into the valid prefix from beyond it cannot be swapped in: the column is
+// then recomputed (rare: columns span the active set).
+void KernelCache::catch_up(int slot) {
+  const std::size_t from = log_position_of_slot_[slot];
+  log_position_of_slot_[slot] = swap_log_.size();
+  const int length = length_of_slot_[slot];
+  double* data = slots_[slot].get();
+  for (std::size_t k = from; k < swap_log_.size(); ++k) {
+    const auto [low, high] = swap_log_[k];
+    if (high < length) {
+      std::swap(data[low], data[high]);
+    } else if (low < length) {
+      length_of_slot_[slot] = 0;
+      return;
+    }
   }
 }
 

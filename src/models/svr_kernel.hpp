@@ -79,7 +79,8 @@ class KernelCache {
 
   // Column of the sample at `position`, valid on positions [0, length).
   const double* column(int position, int length);
-  // Exchanges positions a and b in the kernel and in every cached column.
+  // Exchanges positions a and b in the kernel and (lazily, when next used) in every
+  // cached column.
   void swap(const std::vector<std::pair<int, int>>& position_pairs);
   std::size_t columns_computed() const { return columns_computed_; }
   std::size_t capacity() const { return capacity_; }
@@ -87,6 +88,7 @@ class KernelCache {
  private:
   void touch(int sample);  // move to the most-recently-used end
   void unlink(int sample);
+  void catch_up(int slot);  // apply the exchanges logged since the slot was last used
 
   RbfKernel& kernel_;
   std::size_t size_;
@@ -94,7 +96,8 @@ class KernelCache {
   std::vector<std::unique_ptr<double[]>> slots_;
   std::vector<int> slot_of_;                    // per sample: slot or -1
   std::vector<int> length_of_slot_;             // valid prefix of each slot
-  std::vector<int> sample_of_slot_;
+  std::vector<std::size_t> log_position_of_slot_;  // swap_log_ entries already applied
+  std::vector<std::pair<int, int>> swap_log_;       // every exchange, (lower, higher) position
   std::vector<int> previous_, next_;            // LRU list over samples; sentinel = size_
   std::size_t columns_computed_ = 0;
 };
