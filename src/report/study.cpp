@@ -40,6 +40,7 @@ Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& 
     throw UsageError(fmt::format("split row {} leaves no training or no held-out data", study.split_row));
   }
   study.split_time = log.time[study.split_row];
+  if (!options.split_description.empty()) study.split_description = options.split_description;
   const std::vector<ChamberLog> training{slice_rows(log, 0, study.split_row)};
   const std::vector<ChamberLog> held_out{slice_rows(log, study.split_row, log.rows())};
 

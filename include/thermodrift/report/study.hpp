@@ -20,6 +20,7 @@ struct StudyOptions {
   CalibrationOptions calibration;           // shared settings; `model` is set per entry of `models`
   std::optional<std::size_t> split_row;     // first held-out row; default: the last 30 % of the log
   double holdout_fraction = 0.3;            // used when split_row is not given
+  std::string split_description;            // how the split was chosen, in words; default: from the above
   std::function<void(const std::string&)> progress;  // one line per step; may be empty
 };
 

@@ -1,0 +1,134 @@
+// thermodrift report: the seed's whole study on a user's log, as DIR/report.html and
+// DIR/summary.json (docs/report.md).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <optional>
+
+#include "commands.hpp"
+#include "data_options.hpp"
+#include "report_command.hpp"
+#include "thermodrift/error.hpp"
+#include "thermodrift/report/report.hpp"
+
+namespace thermodrift::cli {
+
+namespace {
+
+struct ReportArguments {
+  DataOptions data;
+  std::string out;
+  std::optional<double> holdout_fraction;
+  std::optional<double> split_time;
+  std::uint64_t seed = 1;
+  int threads = 1;
+};
+
+// The true drift, when the log carries it: a column drift_<suffix> for every gyro_<suffix>
+// (as thermodrift simulate writes). Empty otherwise.
+std::vector<std::vector<double>> read_true_drift(const std::string& file, const LogSpec& spec, const ChamberLog& log) {
+  LogSpec drift_spec = spec;
+  drift_spec.gyro_columns.clear();
+  for (const auto& name : log.gyro_names) {
+    if (name.rfind("gyro_", 0) != 0) return {};
+    drift_spec.gyro_columns.push_back("drift_" + name.substr(5));
+  }
+  try {
+    ChamberLog drift = read_chamber_log(file, drift_spec);
+    if (drift.rows() != log.rows()) return {};
+    return drift.gyro;
+  } catch (const Error&) {
+    return {};  // no such columns: the true drift is unknown
+  }
+}
+
+int run_report(const ReportArguments& args) {
+  const auto start = std::chrono::steady_clock::now();
+  if (args.data.files.size() != 1) throw UsageError("report reads one log (--data FILE)");
+  const LogSpec spec = args.data.spec();
+  const ChamberLog log = args.data.read(spec).front();
+  ReportOptions options;
+  options.out_dir = args.out;
+  options.seed = args.seed;
+  options.threads = args.threads;
+  options.study.calibration.smooth_seconds = args.data.smooth;
+  options.study.calibration.svr.threads = std::max(1, args.threads);
+  if (args.split_time) {
+    const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time) - log.time.begin();
+    options.study.split_row = static_cast<std::size_t>(row);
+    options.study.split_description = fmt::format("held out from t = {:g} s on (--split-time)", *args.split_time);
+  } else if (args.holdout_fraction) {
+    if (!(*args.holdout_fraction > 0 && *args.holdout_fraction < 1)) {
+      throw UsageError(fmt::format("--holdout-fraction {} is not in (0, 1)", *args.holdout_fraction));
+    }
+    options.study.holdout_fraction = *args.holdout_fraction;
+  }
+  options.true_drift = read_true_drift(args.data.files.front(), spec, log);
+  options.title = "thermodrift report — " + log.source;
+  options.command_line = fmt::format("thermodrift report --data {} --out {}", log.source, args.out);
+  options.earlier_steps.emplace_back(
+      "read the log", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  options.progress = progress_printer("thermodrift report", start);
+  const ReportResult result = write_report(log, spec, options);
+  print_report_tables(result.summary);
+  if (!result.figures_drawn) warn(result.figures_note);
+  fmt::print("\nreport: {}\nsummary: {}\n", result.html_path, result.summary_path);
+  return 0;
+}
+
+}  // namespace
+
+std::function<void(const std::string&)> progress_printer(const std::string& prefix,
+                                                         std::chrono::steady_clock::time_point start) {
+  return [prefix, start](const std::string& line) {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    fmt::print(stderr, "{} [{:6.1f} s] {}\n", prefix, seconds, line);
+  };
+}
+
+void print_report_tables(const nlohmann::json& summary) {
+  const bool floor_known = summary["data"]["true_drift_known"].get<bool>();
+  for (const char* part : {"in_sample", "held_out"}) {
+    const auto& table = summary["tables"][part];
+    fmt::print("\n{} — residual MSE of the smoothed drift, (°/h)²{}\n",
+               std::string(part) == "in_sample" ? "IN-SAMPLE (training part, as the paper reports)"
+                                                : "HELD-OUT (" + summary["split"]["description"].get<std::string>() + ")",
+               floor_known ? "; [×floor] in brackets" : "");
+    fmt::print("{:<10} {:>11}", "axis", "original");
+    for (const auto& column : table["columns"]) fmt::print(" {:>22}", column["label"].get<std::string>());
+    if (floor_known) fmt::print(" {:>11}", "noise floor");
+    fmt::print("\n");
+    for (const auto& row : table["rows"]) {
+      fmt::print("{:<10} {:>11}", row["axis"].get<std::string>(), format_number(row["original_mse"].get<double>()));
+      for (const auto& cell : row["models"]) {
+        std::string text = format_number(cell["mse"].get<double>());
+        if (floor_known && cell["ratio_to_floor"].is_number()) {
+          text += " [" + format_number(cell["ratio_to_floor"].get<double>()) + "]";
+        }
+        fmt::print(" {:>22}", text);
+      }
+      if (floor_known && row["noise_floor"].is_number()) fmt::print(" {:>11}", format_number(row["noise_floor"].get<double>()));
+      fmt::print("\n");
+    }
+  }
+}
+
+Command add_report(CLI::App& parent) {
+  auto args = std::make_shared<ReportArguments>();
+  CLI::App* app = parent.add_subcommand("report", "the seed's study on a log: tables, figures, report.html, summary.json");
+  args->data.add_to(*app);
+  app->add_option("--out", args->out, "folder for report.html, summary.json, figures and models")->required();
+  auto* fraction = app->add_option_function<double>(
+      "--holdout-fraction", [args](double f) { args->holdout_fraction = f; },
+      "the last fraction of the log held out (default 0.3)");
+  app->add_option_function<double>("--split-time", [args](double s) { args->split_time = s; },
+                                   "hold out the log from this time (s) on")
+      ->excludes(fraction);
+  app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)");
+  app->add_option("--threads", args->threads, "threads for the SVR fits")->check(CLI::PositiveNumber);
+  return {app, [args] { return run_report(*args); }};
+}
+
+}  // namespace thermodrift::cli

@@ -1,0 +1,57 @@
+// The report of the seed's study on one log: the study (report/study.hpp), the
+// cross-axis experiment, compensation of every axis, Allan deviation before and after,
+// gnuplot SVG figures, DIR/report.html (one self-contained page) and DIR/summary.json
+// (the same numbers). docs/report.md describes what is in it and why.
+//
+//   ReportOptions options;
+//   options.out_dir = "report";
+//   options.study.split_row = first_row_of_last_cycle;
+//   ReportResult result = write_report(log, spec, options);   // result.html_path
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/report/study.hpp"
+
+namespace thermodrift {
+
+struct ReportOptions {
+  StudyOptions study;                      // models, calibration settings, split, progress
+  std::string out_dir;                     // created if missing; outputs are replaced whole
+  std::string title = "thermodrift report";
+  std::string command_line;                // how the report was asked for (shown on the page)
+  // True drift per axis and log row (°/h), when known (simulated data): gives the noise
+  // floor and each result's ratio to it. Empty: unknown.
+  std::vector<std::vector<double>> true_drift;
+  std::string gnuplot = "gnuplot";         // program drawing the figures; absent: a page without figures
+  std::vector<std::pair<std::string, double>> earlier_steps;  // (step, seconds) done by the caller
+  std::uint64_t seed = 1;                  // recorded with the parameters
+  int threads = 1;                         // recorded with the parameters
+  std::function<void(const std::string&)> progress;  // one line per step; may be empty
+};
+
+struct ReportResult {
+  Study study;
+  nlohmann::json summary;       // what summary.json holds
+  std::string html_path;
+  std::string summary_path;
+  bool figures_drawn = false;
+  std::string figures_note;     // why there are no figures, when there are none
+};
+
+// Runs everything and writes DIR/report.html, DIR/summary.json, DIR/*.svg, the gnuplot
+// script and its data (DIR/figures/), and one model file per model kind. Throws the
+// study's errors; a failing gnuplot is an Error naming its log file.
+ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const ReportOptions& options);
+
+// How the page prints every number (4 significant digits); tests compare with it.
+std::string format_number(double value);
+
+}  // namespace thermodrift

@@ -1,0 +1,339 @@
+#include "thermodrift/report/report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "report_parts.hpp"
+#include "thermodrift/error.hpp"
+#include "thermodrift/features/moving_average.hpp"
+#include "thermodrift/io/atomic_file.hpp"
+#include "thermodrift/report/allan.hpp"
+#include "thermodrift/report/cross_axis.hpp"
+
+namespace thermodrift {
+
+std::string format_number(double value) {
+  if (!std::isfinite(value)) return "–";
+  return fmt::format("{:.4g}", value);
+}
+
+namespace {
+
+using namespace report_detail;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::string model_label(const ModelStudy& m, std::size_t axis) {
+  if (m.model == "linear") return "linear regression";
+  if (m.model == "stepwise") return "stepwise regression";
+  if (m.model == "svr") {
+    const auto& fit = m.calibration.model.axes.at(axis).fit;
+    const bool tuned = fit.contains("history") || fit.contains("tuning");
+    return tuned ? "SVR + AFSA" : "SVR (fixed C, σ)";
+  }
+  return m.model;
+}
+
+// The tuning histories an SVR fit carries, if any: a top-level "history" (AFSA, or the
+// method "tuning"/"method" names), and any "grid_history" beside it.
+std::vector<TuningHistory> tuning_histories(const nlohmann::json& fit, const std::string& axis) {
+  std::vector<TuningHistory> out;
+  const auto read = [&](const nlohmann::json& history, const std::string& method) {
+    if (!history.is_array() || history.empty()) return;
+    TuningHistory h;
+    h.label = method + ", " + axis;
+    for (const auto& point : history) {
+      if (point.contains("evaluations") && point.contains("best_value")) {
+        h.points.emplace_back(point["evaluations"].get<double>(), point["best_value"].get<double>());
+      }
+    }
+    if (!h.points.empty()) out.push_back(std::move(h));
+  };
+  std::string method = "AFSA";
+  if (fit.contains("tuning") && fit["tuning"].is_object()) {
+    const auto& tuning = fit["tuning"];
+    if (tuning.contains("method") && tuning["method"].is_string()) method = tuning["method"].get<std::string>();
+    if (tuning.contains("history")) read(tuning["history"], method);
+    if (tuning.contains("grid_history")) read(tuning["grid_history"], "grid");
+  }
+  if (fit.contains("method") && fit["method"].is_string()) method = fit["method"].get<std::string>();
+  if (fit.contains("history")) read(fit["history"], method);
+  if (fit.contains("grid_history")) read(fit["grid_history"], "grid");
+  return out;
+}
+
+// Variance of the smoothed noise (gyro - true drift) over rows [begin, end) where the
+// trailing window is full, around its mean: what no drift model can remove.
+double noise_floor(const ChamberLog& log, std::size_t axis, const std::vector<double>& drift, double window_s,
+                   std::size_t begin, std::size_t end) {
+  TrailingMean mean(window_s);
+  std::vector<double> smoothed;
+  for (std::size_t r = 0; r < log.rows(); ++r) {
+    const double value = mean.push(log.time[r], log.gyro[axis][r] - drift[r]);
+    if (r >= begin && r < end && mean.full()) smoothed.push_back(value);
+  }
+  if (smoothed.size() < 2) return NAN;
+  double m = 0;
+  for (double v : smoothed) m += v;
+  m /= static_cast<double>(smoothed.size());
+  double variance = 0;
+  for (double v : smoothed) variance += (v - m) * (v - m);
+  return variance / static_cast<double>(smoothed.size());
+}
+
+double median_interval(const ChamberLog& log) {
+  std::vector<double> steps;
+  for (std::size_t r = 1; r < log.rows(); ++r) steps.push_back(log.time[r] - log.time[r - 1]);
+  if (steps.empty()) return 1.0;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return steps[steps.size() / 2];
+}
+
+nlohmann::json number_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
+
+nlohmann::json metrics_cell(const ResidualMetrics& metrics, double floor) {
+  return {{"mse", metrics.mse_after},
+          {"ratio_to_floor", number_or_null(std::isfinite(floor) && floor > 0 ? metrics.mse_after / floor : NAN)},
+          {"residual_std", metrics.residual_std},
+          {"residual_peak_to_peak", metrics.residual_peak_to_peak}};
+}
+
+}  // namespace
+
+ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const ReportOptions& options) {
+  namespace fs = std::filesystem;
+  if (options.out_dir.empty()) throw UsageError("the report needs an output folder (--out DIR)");
+  fs::create_directories(options.out_dir);
+  const auto say = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  std::vector<std::pair<std::string, double>> timings = options.earlier_steps;
+
+  ReportResult result;
+  StudyOptions study_options = options.study;
+  if (!study_options.progress) study_options.progress = options.progress;
+  auto start = Clock::now();
+  result.study = run_study(log, spec, study_options);
+  Study& study = result.study;
+  for (const auto& m : study.models) timings.emplace_back("fit " + m.model + " (all axes) and evaluate", m.seconds);
+
+  const std::size_t axes = log.axes();
+  const bool known_drift = options.true_drift.size() == axes && axes > 0;
+  std::size_t svr_index = study.models.size();
+  for (std::size_t m = 0; m < study.models.size(); ++m) {
+    if (study.models[m].model == "svr") svr_index = m;
+  }
+
+  // Cross-axis experiment with the SVR's options.
+  std::vector<CrossAxisResult> cross;
+  const ChamberLog training = slice_rows(log, 0, study.split_row);
+  const ChamberLog held_out = slice_rows(log, study.split_row, log.rows());
+  if (axes >= 2 && svr_index < study.models.size()) {
+    say(fmt::format("cross-axis experiment: {} SVR fits, each on the pooled other axes", axes));
+    start = Clock::now();
+    CalibrationOptions cross_options = options.study.calibration;
+    cross = run_cross_axis(training, held_out, log, study.models[svr_index].calibration.model, cross_options);
+    timings.emplace_back("cross-axis experiment", seconds_since(start));
+  }
+
+  // Compensation of every axis by every model over the whole log; Allan deviation on the
+  // held-out part.
+  say("compensating every axis with every model; Allan deviation before and after");
+  start = Clock::now();
+  FigureInputs figures;
+  figures.log = &log;
+  figures.split_time = study.split_time;
+  figures.svr_index = svr_index < study.models.size() ? svr_index : 0;
+  const double sample_rate = 1.0 / median_interval(log);
+  for (const auto& m : study.models) figures.model_labels.push_back(model_label(m, 0));
+  for (std::size_t a = 0; a < axes; ++a) {
+    const auto& pipeline = study.models.front().calibration.model.axes[a].pipeline;
+    const FeatureTable table = feature_table({log}, pipeline, a, false);
+    AxisTrace trace;
+    trace.name = log.gyro_names[a];
+    trace.time_s = table.time;
+    trace.smoothed.assign(table.target.data(), table.target.data() + table.target.size());
+    if (known_drift) {
+      for (auto row : table.row) trace.true_drift.push_back(options.true_drift[a][row]);
+    }
+    for (const auto& m : study.models) {
+      const Eigen::VectorXd p = m.calibration.model.axes[a].predict(table.features);
+      trace.prediction.emplace_back(p.data(), p.data() + p.size());
+    }
+    for (const auto& c : cross) {
+      if (c.left_out != a) continue;
+      const Eigen::VectorXd p = c.model.predict(table.features);
+      trace.cross_prediction.assign(p.data(), p.data() + p.size());
+    }
+    AxisAllan allan;
+    allan.name = trace.name;
+    const auto first = static_cast<std::size_t>(
+        std::lower_bound(table.row.begin(), table.row.end(), study.split_row) - table.row.begin());
+    std::vector<double> raw;
+    for (std::size_t i = first; i < table.rows(); ++i) raw.push_back(log.gyro[a][table.row[i]]);
+    allan.curves.push_back({"raw output", overlapping_allan_deviation(raw, sample_rate)});
+    for (std::size_t m = 0; m < study.models.size(); ++m) {
+      std::vector<double> compensated(raw.size());
+      for (std::size_t i = first; i < table.rows(); ++i) compensated[i - first] = raw[i - first] - trace.prediction[m][i];
+      allan.curves.push_back({"minus " + figures.model_labels[m], overlapping_allan_deviation(compensated, sample_rate)});
+    }
+    figures.allan.push_back(std::move(allan));
+    figures.axes.push_back(std::move(trace));
+    if (svr_index < study.models.size()) {
+      for (auto& h : tuning_histories(study.models[svr_index].calibration.model.axes[a].fit, log.gyro_names[a])) {
+        figures.tuning.push_back(std::move(h));
+      }
+    }
+  }
+  for (const auto& m : study.models) {
+    save_drift_model(m.calibration.model, (fs::path(options.out_dir) / ("model_" + m.model + ".json")).string());
+  }
+  timings.emplace_back("compensation, Allan deviation, model files", seconds_since(start));
+
+  say("drawing the figures with gnuplot");
+  start = Clock::now();
+  FigureOutcome drawn = draw_figures(figures, options.out_dir, options.gnuplot);
+  result.figures_drawn = drawn.drawn;
+  result.figures_note = drawn.note;
+  timings.emplace_back("figures (gnuplot)", seconds_since(start));
+
+  // The summary: every number the page shows.
+  start = Clock::now();
+  nlohmann::json summary;
+  summary["title"] = options.title;
+  summary["command"] = options.command_line;
+  summary["data"] = {{"source", log.source},
+                     {"rows", log.rows()},
+                     {"axes", log.gyro_names},
+                     {"temperatures", log.temperature_names},
+                     {"duration_s", log.rows() ? log.time.back() - log.time.front() : 0.0},
+                     {"sample_rate_hz", sample_rate},
+                     {"true_drift_known", known_drift}};
+  summary["split"] = {{"row", study.split_row},
+                      {"time_s", study.split_time},
+                      {"description", study.split_description},
+                      {"training_rows", study.split_row},
+                      {"held_out_rows", log.rows() - study.split_row}};
+  const auto& calibration = options.study.calibration;
+  const auto& pipeline = study.models.front().calibration.model.axes.front().pipeline;
+  nlohmann::json svr_params = nlohmann::json::array();
+  if (svr_index < study.models.size()) {
+    for (const auto& axis : study.models[svr_index].calibration.model.axes) {
+      nlohmann::json entry = {{"axis", axis.name}};
+      if (axis.fit.contains("params")) entry["params"] = axis.fit["params"];
+      for (const char* key : {"evaluations", "tuning", "afsa", "objective", "method"}) {
+        if (axis.fit.contains(key)) entry[key] = axis.fit[key];
+      }
+      if (axis.fit.contains("solver")) entry["solver"] = axis.fit["solver"];
+      svr_params.push_back(entry);
+    }
+  }
+  summary["parameters"] = {{"smooth_seconds", pipeline.smooth_seconds},
+                           {"rate_span_seconds", pipeline.rate_span_seconds},
+                           {"decimation", pipeline.decimation},
+                           {"terms", pipeline.term_names()},
+                           {"svr_options", {{"C", calibration.svr.C},
+                                            {"gamma", calibration.svr.gamma},
+                                            {"sigma", 1.0 / std::sqrt(2.0 * calibration.svr.gamma)},
+                                            {"epsilon", calibration.svr.epsilon},
+                                            {"tolerance", calibration.svr.tolerance}}},
+                           {"svr_per_axis", svr_params},
+                           {"seed", options.seed},
+                           {"threads", options.threads}};
+
+  std::vector<double> floor_in(axes, NAN), floor_out(axes, NAN);
+  if (known_drift) {
+    for (std::size_t a = 0; a < axes; ++a) {
+      floor_in[a] = noise_floor(log, a, options.true_drift[a], pipeline.smooth_seconds, 0, study.split_row);
+      floor_out[a] = noise_floor(log, a, options.true_drift[a], pipeline.smooth_seconds, study.split_row, log.rows());
+    }
+  }
+  // Table 1's column order: original drift, SVR, linear, then stepwise.
+  std::vector<std::size_t> order;
+  for (const char* kind : {"svr", "linear", "stepwise"}) {
+    for (std::size_t m = 0; m < study.models.size(); ++m) {
+      if (study.models[m].model == kind) order.push_back(m);
+    }
+  }
+  for (std::size_t m = 0; m < study.models.size(); ++m) {
+    if (std::find(order.begin(), order.end(), m) == order.end()) order.push_back(m);
+  }
+  nlohmann::json columns = nlohmann::json::array();
+  for (auto m : order) columns.push_back({{"model", study.models[m].model}, {"label", model_label(study.models[m], 0)}});
+  nlohmann::json tables;
+  for (const bool is_held_out : {false, true}) {
+    nlohmann::json rows = nlohmann::json::array();
+    const auto& floors = is_held_out ? floor_out : floor_in;
+    for (std::size_t a = 0; a < axes; ++a) {
+      const auto& first = is_held_out ? study.models.front().held_out[a] : study.models.front().in_sample[a];
+      nlohmann::json row = {{"axis", log.gyro_names[a]},
+                            {"samples", first.samples},
+                            {"original_mse", first.mse_before},
+                            {"noise_floor", number_or_null(floors[a])}};
+      nlohmann::json cells = nlohmann::json::array();
+      for (auto m : order) {
+        const auto& metrics = is_held_out ? study.models[m].held_out[a] : study.models[m].in_sample[a];
+        nlohmann::json cell = metrics_cell(metrics, floors[a]);
+        cell["model"] = study.models[m].model;
+        cells.push_back(cell);
+      }
+      row["models"] = cells;
+      rows.push_back(row);
+    }
+    tables[is_held_out ? "held_out" : "in_sample"] = {{"columns", columns}, {"rows", rows}};
+  }
+  summary["tables"] = tables;
+
+  nlohmann::json cross_json = nlohmann::json::array();
+  for (const auto& c : cross) {
+    cross_json.push_back({{"left_out", c.left_out_name},
+                          {"trained_on", c.training_axes},
+                          {"training_samples", c.training_samples},
+                          {"held_out_mse", c.held_out.mse_after},
+                          {"held_out_original_mse", c.held_out.mse_before},
+                          {"own_axis_held_out_mse", study.models[svr_index].held_out[c.left_out].mse_after},
+                          {"whole_log_mse", c.whole_log.mse_after},
+                          {"seconds", c.seconds}});
+  }
+  summary["cross_axis"] = cross_json;
+
+  nlohmann::json allan_json = nlohmann::json::array();
+  for (const auto& axis : figures.allan) {
+    nlohmann::json curves = nlohmann::json::array();
+    for (const auto& curve : axis.curves) {
+      nlohmann::json points = nlohmann::json::array();
+      for (const auto& p : curve.points) points.push_back({p.tau_s, p.deviation});
+      curves.push_back({{"label", curve.label}, {"tau_s_adev_dph", points}});
+    }
+    allan_json.push_back({{"axis", axis.name}, {"curves", curves}});
+  }
+  summary["allan_deviation_held_out"] = allan_json;
+  nlohmann::json figures_json = nlohmann::json::array();
+  for (const auto& f : drawn.figures) figures_json.push_back({{"file", f.file}, {"title", f.title}});
+  summary["figures"] = drawn.drawn ? figures_json : nlohmann::json::array();
+  summary["figures_note"] = drawn.note;
+  summary["study"] = study.to_json();
+
+  result.html_path = (fs::path(options.out_dir) / "report.html").string();
+  result.summary_path = (fs::path(options.out_dir) / "summary.json").string();
+  timings.emplace_back("summary and page", seconds_since(start));
+  nlohmann::json timing_json = nlohmann::json::array();
+  double total = 0;
+  for (const auto& [step, seconds] : timings) {
+    timing_json.push_back({{"step", step}, {"seconds", seconds}});
+    total += seconds;
+  }
+  summary["timings"] = timing_json;
+  summary["total_seconds"] = total;
+  write_file_atomically(result.summary_path, summary.dump(1) + "\n");
+  write_file_atomically(result.html_path, render_html(summary, drawn, options.out_dir));
+  result.summary = std::move(summary);
+  return result;
+}
+
+}  // namespace thermodrift

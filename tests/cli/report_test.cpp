@@ -1,0 +1,167 @@
+// thermodrift report end to end on a small simulated log, and the Allan deviation
+// against the white-noise law.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+#include <regex>
+#include <set>
+
+#include "../support/temp_dir.hpp"
+#include "thermodrift/error.hpp"
+#include "thermodrift/report/allan.hpp"
+#include "thermodrift/report/report.hpp"
+
+namespace thermodrift {
+namespace {
+
+using testing::TempDir;
+
+std::string binary() { return THERMODRIFT_BINARY; }
+
+bool gnuplot_installed() { return std::system("command -v gnuplot > /dev/null 2>&1") == 0; }
+
+// White noise of standard deviation σ at rate f has σ_A(τ) = σ / √(τ f). With N samples
+// and cluster m, the overlapping estimate's relative error is about √(1/(N/m)) (χ²
+// with ~1.5 N/m degrees of freedom); at m ≤ N/100 that is well inside 15 %.
+TEST(AllanDeviation, FollowsTheWhiteNoiseLaw) {
+  for (const double rate : {1.0, 10.0}) {
+    std::mt19937_64 generator(42);
+    std::normal_distribution<double> normal(0.0, 2.0);
+    std::vector<double> series(200'000);
+    for (auto& value : series) value = 5.0 + normal(generator);  // a constant bias does not matter
+    const auto points = overlapping_allan_deviation(series, rate, 10, 0.25);
+    ASSERT_GT(points.size(), 30U);
+    EXPECT_DOUBLE_EQ(points.front().tau_s, 1.0 / rate);
+    for (std::size_t i = 1; i < points.size(); ++i) EXPECT_GT(points[i].tau_s, points[i - 1].tau_s);
+    for (const auto& p : points) {
+      const double m = p.tau_s * rate;
+      if (m > static_cast<double>(series.size()) / 100) continue;
+      const double expected = 2.0 / std::sqrt(p.tau_s * rate);
+      EXPECT_NEAR(p.deviation / expected, 1.0, 0.15) << "tau " << p.tau_s << " rate " << rate;
+      EXPECT_EQ(p.terms, series.size() - 2 * static_cast<std::size_t>(std::lround(m)) + 1);
+    }
+  }
+}
+
+TEST(AllanDeviation, LinearRampAndEdgeCases) {
+  // A rate ramp y_k = a k has second differences of the phase a m² τ0², so σ(τ) = a m τ0 / √2.
+  std::vector<double> ramp(1000);
+  for (std::size_t k = 0; k < ramp.size(); ++k) ramp[k] = 0.01 * static_cast<double>(k);
+  for (const auto& p : overlapping_allan_deviation(ramp, 1.0)) {
+    EXPECT_NEAR(p.deviation, 0.01 * p.tau_s / std::sqrt(2.0), 1e-9);
+  }
+  EXPECT_TRUE(overlapping_allan_deviation(std::vector<double>{1.0, 2.0}, 1.0).empty());
+  EXPECT_THROW(overlapping_allan_deviation(ramp, 0.0), UsageError);
+  EXPECT_THROW(overlapping_allan_deviation(ramp, 1.0, 0), UsageError);
+  EXPECT_THROW(overlapping_allan_deviation(ramp, 1.0, 10, 0.6), UsageError);
+}
+
+bool valid_svg_with_data(const std::string& text) {
+  const bool starts = text.rfind("<?xml", 0) == 0 || text.rfind("<svg", 0) == 0;
+  const bool closes = text.find("</svg>") != std::string::npos;
+  const bool data = std::regex_search(text, std::regex(R"(<path[^>]*\sd=['"]M[^'"]{40,})")) ||
+                    text.find("<polyline") != std::string::npos;
+  return starts && closes && data;
+}
+
+class Report : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    const std::string t = binary();
+    auto simulated = testing::run_in(*dir_, t + " simulate --out chamber.csv --cycles 2 --rate 0.2");
+    ASSERT_EQ(simulated.status, 0) << simulated.err;
+    result_ = new testing::CommandResult(testing::run_in(
+        *dir_, t + " report --data chamber.csv --time time_s --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z"
+                   " --out out --holdout-fraction 0.5"));
+  }
+  static void TearDownTestSuite() {
+    delete result_;
+    delete dir_;
+  }
+  static std::string page() { return testing::read_file(dir_->file("out/report.html")); }
+  static nlohmann::json summary() { return nlohmann::json::parse(testing::read_file(dir_->file("out/summary.json"))); }
+
+  static TempDir* dir_;
+  static testing::CommandResult* result_;
+};
+TempDir* Report::dir_ = nullptr;
+testing::CommandResult* Report::result_ = nullptr;
+
+TEST_F(Report, RunsAndSaysWhereTheReportIs) {
+  ASSERT_EQ(result_->status, 0) << result_->err;
+  EXPECT_NE(result_->out.find("report: out/report.html"), std::string::npos) << result_->out;
+  EXPECT_NE(result_->out.find("HELD-OUT"), std::string::npos);
+  EXPECT_NE(result_->err.find("fitting svr"), std::string::npos) << "progress lines on stderr";
+}
+
+TEST_F(Report, EveryReferencedFigureExistsAndIsSvgWithData) {
+  ASSERT_EQ(result_->status, 0) << result_->err;
+  if (!gnuplot_installed()) GTEST_SKIP() << "gnuplot is not installed";
+  const std::string html = page();
+  std::set<std::string> referenced;
+  const std::regex link(R"(href="([^"]+\.svg)\")");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), link); it != std::sregex_iterator(); ++it) {
+    referenced.insert((*it)[1]);
+  }
+  for (const char* expected : {"raw.svg", "smoothed.svg", "fit_gyro_x.svg", "residual_gyro_z.svg", "cross_axis.svg",
+                               "allan.svg"}) {
+    EXPECT_TRUE(referenced.count(expected)) << expected << " not on the page";
+  }
+  for (const auto& file : referenced) {
+    const std::string path = dir_->file("out/" + file);
+    ASSERT_TRUE(std::filesystem::exists(path)) << file;
+    EXPECT_TRUE(valid_svg_with_data(testing::read_file(path))) << file;
+  }
+  // Inline too: the page opens from disk without its folder.
+  std::size_t inline_count = 0;
+  for (std::size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) ++inline_count;
+  EXPECT_EQ(inline_count, referenced.size());
+  const auto listed = summary()["figures"];
+  EXPECT_EQ(listed.size(), referenced.size());
+}
+
+TEST_F(Report, SummaryNumbersAreThoseOnThePage) {
+  ASSERT_EQ(result_->status, 0) << result_->err;
+  const std::string html = page();
+  const auto s = summary();
+  ASSERT_TRUE(s["data"]["true_drift_known"].get<bool>()) << "drift_* columns detected";
+  std::size_t checked = 0;
+  for (const char* part : {"in_sample", "held_out"}) {
+    for (const auto& row : s["tables"][part]["rows"]) {
+      const auto expect_on_page = [&](double value) {
+        EXPECT_NE(html.find(">" + format_number(value) + "<"), std::string::npos) << part << " " << value;
+        ++checked;
+      };
+      expect_on_page(row["original_mse"].get<double>());
+      expect_on_page(row["noise_floor"].get<double>());
+      for (const auto& cell : row["models"]) {
+        expect_on_page(cell["mse"].get<double>());
+        expect_on_page(cell["ratio_to_floor"].get<double>());
+        expect_on_page(cell["residual_std"].get<double>());
+        expect_on_page(cell["residual_peak_to_peak"].get<double>());
+      }
+    }
+  }
+  EXPECT_EQ(checked, 2U * 3U * (2U + 3U * 4U));
+  for (const auto& c : s["cross_axis"]) {
+    EXPECT_NE(html.find(">" + format_number(c["held_out_mse"].get<double>()) + "<"), std::string::npos);
+  }
+  EXPECT_EQ(s["cross_axis"].size(), 3U);
+  EXPECT_EQ(s["split"]["description"], "last 50 % of the log held out");
+  EXPECT_NE(html.find("last 50 % of the log held out"), std::string::npos);
+  EXPECT_NE(html.find("Which table to believe: the held-out one."), std::string::npos);
+}
+
+TEST_F(Report, NeedsAnOutputFolderAndOneLog) {
+  const auto missing = testing::run_in(*dir_, binary() + " report --data chamber.csv");
+  EXPECT_EQ(missing.status, 2);
+}
+
+}  // namespace
+}  // namespace thermodrift
