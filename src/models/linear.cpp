@@ -152,13 +152,24 @@ LinearModel fit_least_squares(const Eigen::MatrixXd& features, const Eigen::Vect
   const Eigen::MatrixXd scaled = design * scale.cwiseInverse().asDiagonal();
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(scaled);
   qr.setThreshold(1e-10);
-  const Eigen::VectorXd solution = qr.solve(target).cwiseQuotient(scale);
+  // Basic solution on the first rank() pivots, the rest left at 0. Eigen's qr.solve()
+  // would not do: it keeps every pivot above machine epsilon (setThreshold affects
+  // rank(), not solve()), so two collinear columns got huge cancelling coefficients.
+  const Eigen::Index rank = qr.rank();
+  Eigen::VectorXd rotated = target;
+  rotated.applyOnTheLeft(qr.householderQ().setLength(rank).adjoint());
+  Eigen::VectorXd pivoted = Eigen::VectorXd::Zero(parameters);
+  pivoted.head(rank) = qr.matrixQR()
+                           .topLeftCorner(rank, rank)
+                           .triangularView<Eigen::Upper>()
+                           .solve(rotated.head(rank));
+  const Eigen::VectorXd solution = (qr.colsPermutation() * pivoted).cwiseQuotient(scale);
 
   LinearModel model;
   model.regressors = std::move(regressors);
   model.intercept = solution(0);
   model.coefficients = solution.tail(parameters - 1);
-  model.rank_deficiency = static_cast<std::size_t>(parameters - qr.rank());
+  model.rank_deficiency = static_cast<std::size_t>(parameters - rank);
   return model;
 }
 
