@@ -139,6 +139,14 @@ DriftModel load_drift_model(const std::string& path) {
     const bool truncated = e.byte >= text.size();
     throw DataError(path, line, column,
                     truncated ? "model file ends early (truncated?)" : "model file is not valid JSON");
+  } catch (const nlohmann::json::exception& e) {
+    // A number too large for a double ("1e999") is out_of_range, not a parse_error; it
+    // must still be bad data naming the file, not an internal failure.
+    std::string what = e.what();
+    if (const auto bracket = what.find("] "); what.starts_with("[json.exception") && bracket != std::string::npos) {
+      what.erase(0, bracket + 2);
+    }
+    throw DataError(path, 0, 0, fmt::format("model file is not valid JSON: {}", what));
   }
   return drift_model_from_json(json, path);
 }

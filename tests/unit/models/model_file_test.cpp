@@ -1,0 +1,263 @@
+// The model file: saved and loaded unchanged, and every file that does not fit rejected
+// with a one-line DataError (truncation with the line and column where the text ends).
+#include "thermodrift/models/model_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "../../support/temp_dir.hpp"
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+namespace {
+
+using testing::TempDir;
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+DriftModel two_axis_model() {
+  DriftModel model;
+  model.gyro_unit = GyroUnit::dps;
+  model.rate_hz = 50;
+  for (int a = 0; a < 2; ++a) {
+    AxisModel axis;
+    axis.name = a == 0 ? "gyro_x" : "gyro_y";
+    axis.gyro_column = std::to_string(5 + a);
+    axis.temperature_column = "1";
+    axis.pipeline.smooth_seconds = 1;
+    axis.pipeline.rate_span_seconds = 1;
+    axis.pipeline.decimation = 5;
+    axis.pipeline.reference_temperature = 31.0625 + a;
+    axis.kind = a == 0 ? "linear" : "stepwise";
+    LinearModel linear;
+    linear.regressors = a == 0 ? linear_regressors(2) : quadratic_regressors(2);
+    linear.coefficients = Eigen::VectorXd::LinSpaced(static_cast<Eigen::Index>(linear.regressors.size()), -1.5, 2.25);
+    linear.intercept = 0.1 + a;
+    axis.model = linear;
+    axis.fit = {{"note", "made by hand"}};
+    model.axes.push_back(axis);
+  }
+  return model;
+}
+
+DataError load_error(const std::string& path) {
+  try {
+    load_drift_model(path);
+  } catch (const DataError& error) {
+    return error;
+  }
+  ADD_FAILURE() << "no DataError loading " << path;
+  return DataError("", 0, 0, "");
+}
+
+// The saved JSON of the two-axis model, for editing.
+nlohmann::json saved_json(const TempDir& dir) {
+  const auto path = dir.file("model.json");
+  save_drift_model(two_axis_model(), path);
+  return nlohmann::json::parse(testing::read_file(path));
+}
+
+TEST(ModelFile, SaveAndLoadGiveTheSameModel) {
+  TempDir dir;
+  const auto path = dir.file("model.json");
+  const DriftModel model = two_axis_model();
+  save_drift_model(model, path);
+  const DriftModel back = load_drift_model(path);
+  EXPECT_EQ(back.gyro_unit, GyroUnit::dps);
+  EXPECT_FALSE(back.time_column);
+  ASSERT_TRUE(back.rate_hz);
+  EXPECT_EQ(*back.rate_hz, 50.0);
+  ASSERT_EQ(back.axes.size(), 2u);
+  for (std::size_t a = 0; a < 2; ++a) {
+    const auto& want = model.axes[a];
+    const auto& got = back.axes[a];
+    EXPECT_EQ(got.name, want.name);
+    EXPECT_EQ(got.gyro_column, want.gyro_column);
+    EXPECT_EQ(got.temperature_column, want.temperature_column);
+    EXPECT_EQ(got.kind, want.kind);
+    EXPECT_EQ(got.pipeline.to_json(), want.pipeline.to_json());
+    const auto& linear_want = std::get<LinearModel>(want.model);
+    const auto& linear_got = std::get<LinearModel>(got.model);
+    EXPECT_EQ(linear_got.intercept, linear_want.intercept);
+    EXPECT_EQ(linear_got.coefficients, linear_want.coefficients);
+    EXPECT_EQ(got.fit, want.fit);
+    const std::vector<double> features = {2.5, -0.75};
+    EXPECT_EQ(got.predict(features), want.predict(features));
+  }
+  // Saving what was loaded gives the same bytes.
+  const auto again = dir.file("again.json");
+  save_drift_model(back, again);
+  EXPECT_EQ(testing::read_file(again), testing::read_file(path));
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"again.json", "model.json"}));  // no temporary left
+}
+
+TEST(ModelFile, LogSpecReadsLikeTheTrainingLog) {
+  const LogSpec spec = two_axis_model().log_spec();
+  EXPECT_EQ(spec.gyro_columns, (std::vector<std::string>{"5", "6"}));
+  EXPECT_EQ(spec.temperature_columns, (std::vector<std::string>{"1", "1"}));
+  EXPECT_EQ(spec.gyro_unit, GyroUnit::dps);
+  EXPECT_EQ(spec.rate_hz, 50.0);
+}
+
+TEST(ModelFile, SavingOverAnInputIsRefused) {
+  TempDir dir;
+  const auto data = dir.write("data.csv", "time_s,gyro,temp\n0,1,2\n");
+  EXPECT_THROW(save_drift_model(two_axis_model(), data, {data}), UsageError);
+  EXPECT_EQ(testing::read_file(data), "time_s,gyro,temp\n0,1,2\n");
+}
+
+TEST(ModelFileErrors, AnotherVersion) {
+  TempDir dir;
+  auto json = saved_json(dir);
+  json["version"] = 2;
+  const auto path = dir.write("v2.json", json.dump(1));
+  const auto error = load_error(path);
+  EXPECT_EQ(error.file(), path);
+  EXPECT_EQ(error.line(), 0u);
+  EXPECT_EQ(error.column(), 0u);
+  EXPECT_TRUE(contains(error.message(), "model file version 2 is not supported (this build reads version 1)"))
+      << error.what();
+}
+
+TEST(ModelFileErrors, AnotherPipelineVersion) {
+  TempDir dir;
+  auto json = saved_json(dir);
+  json["axes"][1]["pipeline"]["version"] = 7;
+  const auto error = load_error(dir.write("p.json", json.dump()));
+  EXPECT_TRUE(contains(error.message(), "axis 2")) << error.what();
+  EXPECT_TRUE(contains(error.message(), "pipeline version 7")) << error.what();
+}
+
+TEST(ModelFileErrors, NotAModelFile) {
+  TempDir dir;
+  EXPECT_TRUE(contains(load_error(dir.write("a.json", "[1, 2]")).message(), "not a thermodrift model file"));
+  EXPECT_TRUE(contains(load_error(dir.write("b.json", "{\"format\": \"other\"}")).message(),
+                       "not a thermodrift model file"));
+  EXPECT_TRUE(contains(load_error(dir.file("missing.json")).message(), "cannot open"));
+}
+
+// Line and column (1-based) of the position just past the last character of `text`.
+std::pair<std::size_t, std::size_t> end_of(const std::string& text) {
+  std::size_t line = 1, column = 1;
+  for (char c : text) {
+    if (c == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return {line, column};
+}
+
+TEST(ModelFileErrors, TruncatedFileNamesWhereItEnds) {
+  TempDir dir;
+  const std::string whole = saved_json(dir).dump(1);
+  for (std::size_t cut : {whole.size() / 3, whole.size() / 2, whole.size() - 2}) {
+    std::string text = whole.substr(0, cut);
+    // Cut inside a number or a name the parser might still accept as a prefix; cut at a
+    // character that leaves the document open.
+    while (!text.empty() && (text.back() == ' ' || text.back() == '\n')) text.pop_back();
+    const auto path = dir.write("cut.json", text);
+    const auto error = load_error(path);
+    const auto [line, column] = end_of(text);
+    EXPECT_EQ(error.line(), line) << "cut at " << cut << ": " << error.what();
+    EXPECT_EQ(error.column(), column) << "cut at " << cut << ": " << error.what();
+    EXPECT_TRUE(contains(error.message(), "ends early")) << error.what();
+    EXPECT_TRUE(contains(error.what(), path + ":" + std::to_string(line) + ":" + std::to_string(column)));
+  }
+}
+
+TEST(ModelFileErrors, EmptyFile) {
+  TempDir dir;
+  const auto error = load_error(dir.write("empty.json", ""));
+  EXPECT_EQ(error.line(), 1u);
+  EXPECT_EQ(error.column(), 1u);
+  EXPECT_TRUE(contains(error.message(), "ends early")) << error.what();
+}
+
+TEST(ModelFileErrors, SyntaxErrorNamesItsLineAndColumn) {
+  TempDir dir;
+  const auto error = load_error(dir.write("bad.json", "{\n  \"format\": \"thermodrift-model\",\n  \"version\": 1x\n}\n"));
+  EXPECT_EQ(error.line(), 3u);
+  EXPECT_EQ(error.column(), 15u);  // the 'x'
+  EXPECT_TRUE(contains(error.message(), "not valid JSON")) << error.what();
+}
+
+TEST(ModelFileErrors, WrongNumberOfCoefficients) {
+  TempDir dir;
+  auto json = saved_json(dir);
+  json["axes"][0]["model"]["coefficients"].push_back(1.0);
+  const auto error = load_error(dir.write("coef.json", json.dump()));
+  EXPECT_EQ(error.line(), 0u);
+  EXPECT_TRUE(contains(error.message(), "axis 1: 3 coefficients for 2 regressors")) << error.what();
+}
+
+TEST(ModelFileErrors, RegressorOfAnUnknownTerm) {
+  TempDir dir;
+  auto json = saved_json(dir);
+  json["axes"][0]["model"]["regressors"][1] = "humidity";
+  const auto error = load_error(dir.write("term.json", json.dump()));
+  EXPECT_TRUE(contains(error.message(), "unknown term 'humidity'")) << error.what();
+}
+
+TEST(ModelFileErrors, NonFiniteNumbers) {
+  TempDir dir;
+  const std::string text = saved_json(dir).dump();
+  auto replace_intercept = [&](const std::string& value) {
+    auto json = nlohmann::json::parse(text);
+    json["axes"][1]["model"]["intercept"] = 12345.5;
+    std::string edited = json.dump();
+    const auto at = edited.find("12345.5");
+    return edited.replace(at, 7, value);
+  };
+  // JSON has no infinity; an overflowing literal is the nearest a file gets to one.
+  auto error = load_error(dir.write("inf.json", replace_intercept("1e999")));
+  EXPECT_EQ(error.line(), 0u);
+  EXPECT_TRUE(contains(error.message(), "1e999")) << error.what();
+  EXPECT_TRUE(contains(error.what(), "inf.json: ")) << error.what();
+
+  error = load_error(dir.write("coef.json", replace_intercept("-1e400")));
+  EXPECT_TRUE(contains(error.message(), "-1e400")) << error.what();
+
+  // A NaN is written as null.
+  error = load_error(dir.write("null.json", replace_intercept("null")));
+  EXPECT_TRUE(contains(error.message(), "axis 2")) << error.what();
+
+  // Through the JSON API a true infinity or NaN can reach the loader.
+  for (double bad : {INFINITY, -INFINITY, NAN}) {
+    auto json = nlohmann::json::parse(text);
+    json["axes"][0]["model"]["coefficients"][1] = bad;
+    try {
+      drift_model_from_json(json, "api.json");
+      ADD_FAILURE() << "accepted coefficient " << bad;
+    } catch (const DataError& e) {
+      EXPECT_TRUE(contains(e.message(), "axis 1: non-finite coefficient")) << e.what();
+    }
+    json = nlohmann::json::parse(text);
+    json["axes"][1]["model"]["intercept"] = bad;
+    EXPECT_THROW(drift_model_from_json(json, "api.json"), DataError) << bad;
+  }
+}
+
+TEST(ModelFileErrors, UnknownKindAndBadUnit) {
+  TempDir dir;
+  auto json = saved_json(dir);
+  json["axes"][0]["kind"] = "neural";
+  EXPECT_TRUE(contains(load_error(dir.write("kind.json", json.dump())).message(), "unknown model kind 'neural'"));
+  json = saved_json(dir);
+  json["gyro_unit"] = "mph";
+  EXPECT_TRUE(contains(load_error(dir.write("unit.json", json.dump())).message(), "unknown gyro unit"));
+  json = saved_json(dir);
+  json["axes"] = nlohmann::json::array();
+  EXPECT_TRUE(contains(load_error(dir.write("axes.json", json.dump())).message(), "no axes"));
+  json = saved_json(dir);
+  json["axes"][0].erase("pipeline");
+  EXPECT_TRUE(contains(load_error(dir.write("nopipe.json", json.dump())).message(), "axis 1"));
+}
+
+}  // namespace
+}  // namespace thermodrift
