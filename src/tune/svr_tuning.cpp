@@ -139,8 +139,10 @@ optim::Afsa::Options afsa_for_budget(long budget, int dimensions) {
   const double fish = std::clamp(std::round(std::sqrt(static_cast<double>(budget) / per_fish_iteration)),
                                  static_cast<double>(std::max(4, dimensions + 2)), 20.0);
   options.fish = static_cast<int>(fish);
+  // Rounded rather than floored, so the budget is spent, not left over: when the run
+  // overshoots, the cap cuts the last iteration in batch order (deterministically).
   options.iterations = std::max(
-      1, static_cast<int>((static_cast<double>(budget) - fish) / (per_fish_iteration * fish)));
+      1, static_cast<int>(std::lround((static_cast<double>(budget) - fish) / (per_fish_iteration * fish))));
   // With a handful of iterations the default floors (r 0.002, λ 0.001) would be reached in
   // three or four halvings; on a (C, σ) surface a hundredth of the box (0.05-0.1 decades)
   // is as fine as the CV error can tell apart.
