@@ -1,10 +1,11 @@
 // ε-SVR: our solver against libsvm's svm-train on the same data in one run.
 //
 //   build/bin/svr_bench [--quick] [--skip-libsvm-corner] [--no-100k] [--threads N]
-//                       [--cache-mb MB] [--tolerance T] [--only N] [--no-libsvm] [--verbose]
+//                       [--cache-mb MB] [--tolerance T] [--only N [--C C] [--gamma G]]
+//                       [--no-libsvm] [--verbose]
 //
-// --only N fits only the ordinary case at n = N (for profiling); --verbose adds our
-// summary line (kernel columns, SVs) under each row.
+// --only N fits only the ordinary case at n = N (or at --C/--gamma), for profiling;
+// --verbose adds our summary line (kernel columns, SVs) under each row.
 //
 // Data: standardized chamber-like (ΔT, dT/dt) with a smooth nonlinear drift plus noise,
 // as in tests/reference. svm-train is timed as a process (wall time, including reading
@@ -239,6 +240,7 @@ void repeated_fits(const Data& data, SvrOptions options) {
 int main(int argc, char** argv) {
   bool quick = false, skip_libsvm_corner = false, run_100k = true, run_libsvm = true;
   int only = 0;
+  double only_C = 215, only_gamma = 0.046;
   SvrOptions base;
   base.threads = 2;
   base.cache_mb = 200;
@@ -261,10 +263,12 @@ int main(int argc, char** argv) {
     else if (argument == "--tolerance") base.tolerance = std::stod(value());
     else if (argument == "--only") only = std::stoi(value());
     else if (argument == "--no-libsvm") run_libsvm = false;
+    else if (argument == "--C") only_C = std::stod(value());
+    else if (argument == "--gamma") only_gamma = std::stod(value());
     else if (argument == "--verbose") verbose = true;
     else {
       std::fprintf(stderr, "usage: svr_bench [--quick] [--skip-libsvm-corner] [--no-100k] [--threads N] "
-                           "[--cache-mb MB] [--tolerance T] [--only N] [--no-libsvm] [--verbose]\n");
+                           "[--cache-mb MB] [--tolerance T] [--only N [--C C] [--gamma G]] [--no-libsvm] [--verbose]\n");
       return 2;
     }
   }
@@ -276,9 +280,9 @@ int main(int argc, char** argv) {
   print_header();
   if (only > 0) {
     SvrOptions ordinary = base;
-    ordinary.C = 215;
-    ordinary.gamma = 0.046;
-    compare("ordinary", chamber_like(only, 1), ordinary, run_libsvm);
+    ordinary.C = only_C;
+    ordinary.gamma = only_gamma;
+    compare("only", chamber_like(only, only == 2271 ? 3 : 1), ordinary, run_libsvm);
     return 0;
   }
   std::vector<int> sizes{2000, 5000, 20000};

@@ -59,30 +59,47 @@ struct Argmax {
   int position = -1;
 };
 
-// r_p -= change_i K_pi + change_j K_pj on [0, count); returns argmax_p r_p + up_offset_p
-// (the first position on ties, as a scalar scan).
+// Both sweeps keep several independent sets of per-lane bests, so that consecutive
+// vectors do not wait on one compare-and-select chain (at n = 2271 the single-chain
+// loops were latency-bound). The sets cover interleaved positions; the final reduction
+// takes the best over all lanes and the first position on ties, as a scalar scan.
+constexpr int kArgmaxSets = 4;
+constexpr int kSelectionSets = 2;
+
+// r_p -= change_i K_pi + change_j K_pj on [0, count); returns argmax_p r_p + up_offset_p.
 THERMODRIFT_SIMD_CLONES
 Argmax update_residual(double* residual, const double* up_offset, const double* column_i, const double* column_j,
                        double change_i, double change_j, int count) {
-  Lanes best = {-kInfinity, -kInfinity, -kInfinity, -kInfinity};
-  LaneMask best_position = {-1, -1, -1, -1};
+  constexpr int kBlock = kLanes * kArgmaxSets;
+  Lanes best[kArgmaxSets];
+  LaneMask best_position[kArgmaxSets];
+  for (int set = 0; set < kArgmaxSets; ++set) {
+    best[set] = Lanes{-kInfinity, -kInfinity, -kInfinity, -kInfinity};
+    best_position[set] = LaneMask{-1, -1, -1, -1};
+  }
   LaneMask position = {0, 1, 2, 3};
   int p = 0;
-  for (; p + kLanes <= count; p += kLanes) {
-    const Lanes r = load(residual + p) - change_i * load(column_i + p) - change_j * load(column_j + p);
-    store(residual + p, r);
-    const Lanes value = r + load(up_offset + p);
-    const LaneMask better = value > best;
-    best = better ? value : best;
-    best_position = better ? position : best_position;
-    position += kLanes;
+  for (; p + kBlock <= count; p += kBlock) {
+    for (int set = 0; set < kArgmaxSets; ++set) {
+      const int at = p + set * kLanes;
+      const Lanes r = load(residual + at) - change_i * load(column_i + at) - change_j * load(column_j + at);
+      store(residual + at, r);
+      const Lanes value = r + load(up_offset + at);
+      const LaneMask better = value > best[set];
+      best[set] = better ? value : best[set];
+      best_position[set] = better ? position + set * kLanes : best_position[set];
+    }
+    position += kBlock;
   }
   Argmax result;
-  for (int lane = 0; lane < kLanes; ++lane) {
-    const int at = static_cast<int>(best_position[lane]);
-    if (at >= 0 && (best[lane] > result.value || (best[lane] == result.value && at < result.position))) {
-      result.value = best[lane];
-      result.position = at;
+  for (int set = 0; set < kArgmaxSets; ++set) {
+    for (int lane = 0; lane < kLanes; ++lane) {
+      const int at = static_cast<int>(best_position[set][lane]);
+      const double value = best[set][lane];
+      if (at >= 0 && (value > result.value || (value == result.value && at < result.position))) {
+        result.value = value;
+        result.position = at;
+      }
     }
   }
   for (; p < count; ++p) {
@@ -108,38 +125,50 @@ struct SecondChoice {
 THERMODRIFT_SIMD_CLONES
 SecondChoice select_second(const double* residual, const double* low_offset, const double* column_i,
                            double largest_up, int count) {
-  Lanes smallest = {kInfinity, kInfinity, kInfinity, kInfinity};
-  Lanes best_gain = {0, 0, 0, 0};        // gap², per lane
-  Lanes best_curvature = {1, 1, 1, 1};   // its curvature
-  LaneMask best_position = {-1, -1, -1, -1};
+  constexpr int kBlock = kLanes * kSelectionSets;
+  Lanes smallest[kSelectionSets];
+  Lanes best_gain[kSelectionSets];       // gap², per lane
+  Lanes best_curvature[kSelectionSets];  // its curvature
+  LaneMask best_position[kSelectionSets];
+  for (int set = 0; set < kSelectionSets; ++set) {
+    smallest[set] = Lanes{kInfinity, kInfinity, kInfinity, kInfinity};
+    best_gain[set] = Lanes{0, 0, 0, 0};
+    best_curvature[set] = Lanes{1, 1, 1, 1};
+    best_position[set] = LaneMask{-1, -1, -1, -1};
+  }
   LaneMask position = {0, 1, 2, 3};
   const Lanes tau = {kTau, kTau, kTau, kTau};
   const Lanes zero = {0, 0, 0, 0};
   int p = 0;
-  for (; p + kLanes <= count; p += kLanes) {
-    const Lanes value = load(residual + p) + load(low_offset + p);
-    smallest = value < smallest ? value : smallest;
-    const Lanes gap = largest_up - value;
-    Lanes curvature = 2.0 - 2.0 * load(column_i + p);
-    curvature = curvature > zero ? curvature : tau;
-    const Lanes gain = gap * gap;
-    const LaneMask better = (gap > zero) & (gain * best_curvature > best_gain * curvature);
-    best_gain = better ? gain : best_gain;
-    best_curvature = better ? curvature : best_curvature;
-    best_position = better ? position : best_position;
-    position += kLanes;
+  for (; p + kBlock <= count; p += kBlock) {
+    for (int set = 0; set < kSelectionSets; ++set) {
+      const int at = p + set * kLanes;
+      const Lanes value = load(residual + at) + load(low_offset + at);
+      smallest[set] = value < smallest[set] ? value : smallest[set];
+      const Lanes gap = largest_up - value;
+      Lanes curvature = 2.0 - 2.0 * load(column_i + at);
+      curvature = curvature > zero ? curvature : tau;
+      const Lanes gain = gap * gap;
+      const LaneMask better = (gap > zero) & (gain * best_curvature[set] > best_gain[set] * curvature);
+      best_gain[set] = better ? gain : best_gain[set];
+      best_curvature[set] = better ? curvature : best_curvature[set];
+      best_position[set] = better ? position + set * kLanes : best_position[set];
+    }
+    position += kBlock;
   }
   SecondChoice result;
   double gain = 0, curvature_of_best = 1;
-  for (int lane = 0; lane < kLanes; ++lane) {
-    result.smallest_low = std::min(result.smallest_low, smallest[lane]);
-    const int at = static_cast<int>(best_position[lane]);
-    if (at < 0) continue;
-    const double left = best_gain[lane] * curvature_of_best, right = gain * best_curvature[lane];
-    if (left > right || (left == right && (result.position < 0 || at < result.position))) {
-      gain = best_gain[lane];
-      curvature_of_best = best_curvature[lane];
-      result.position = at;
+  for (int set = 0; set < kSelectionSets; ++set) {
+    for (int lane = 0; lane < kLanes; ++lane) {
+      result.smallest_low = std::min(result.smallest_low, smallest[set][lane]);
+      const int at = static_cast<int>(best_position[set][lane]);
+      if (at < 0) continue;
+      const double left = best_gain[set][lane] * curvature_of_best, right = gain * best_curvature[set][lane];
+      if (left > right || (left == right && (result.position < 0 || at < result.position))) {
+        gain = best_gain[set][lane];
+        curvature_of_best = best_curvature[set][lane];
+        result.position = at;
+      }
     }
   }
   for (; p < count; ++p) {
