@@ -1,0 +1,368 @@
+// The command line end to end (simulate -> fit on cycle 1 -> evaluate and compensate on
+// cycle 2) and its error contract: one line on stderr naming file:line:column, exit 2 for
+// usage, 3 for bad data, and no output file or temporary left behind by a failure.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "../support/temp_dir.hpp"
+
+namespace thermodrift {
+namespace {
+
+using testing::CommandResult;
+using testing::read_file;
+using testing::split_lines;
+using testing::TempDir;
+
+const std::string kBinary = THERMODRIFT_BINARY;
+constexpr double kCycleSeconds = 22800;  // one default chamber cycle
+const std::string kTemps = " --temp temp_x,temp_y,temp_z";
+
+CommandResult thermodrift(const TempDir& dir, const std::string& arguments) {
+  return testing::run_in(dir, "'" + kBinary + "' " + arguments);
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// stderr of a failed command: exactly one line, starting "thermodrift: ".
+void expect_one_line(const CommandResult& result) {
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_TRUE(result.err.starts_with("thermodrift: ")) << result.err;
+  EXPECT_TRUE(result.err.ends_with("\n")) << result.err;
+}
+
+// The simulated two-cycle run and its split into cycles, made once for every test here.
+class Workflow : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    shared_ = std::make_unique<TempDir>();
+    const auto result = thermodrift(*shared_, "simulate --cycles 2 --out sim.csv");
+    ASSERT_EQ(result.status, 0) << result.err;
+    const auto lines = split_lines(read_file(shared_->file("sim.csv")));
+    ASSERT_GT(lines.size(), 2 * kCycleSeconds);
+    header_ = lines.front();
+    std::string first = header_ + "\n", second = header_ + "\n";
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+      const double time = std::stod(lines[i].substr(0, lines[i].find(',')));
+      (time < kCycleSeconds ? first : second) += lines[i] + "\n";
+    }
+    cycle1_ = shared_->write("cycle1.csv", first);
+    cycle2_ = shared_->write("cycle2.csv", second);
+    const auto fit = thermodrift(*shared_, "fit --data cycle1.csv" + kTemps + " --model linear --out model.json --json");
+    ASSERT_EQ(fit.status, 0) << fit.err;
+    fit_stdout_ = fit.out;
+    model_ = shared_->file("model.json");
+  }
+  static void TearDownTestSuite() { shared_.reset(); }
+
+  // Copies a shared file into this test's own directory.
+  std::string copy(const std::string& from, const std::string& name) { return dir_.write(name, read_file(from)); }
+
+  static std::unique_ptr<TempDir> shared_;
+  static std::string header_, cycle1_, cycle2_, model_, fit_stdout_;
+  TempDir dir_;
+};
+
+std::unique_ptr<TempDir> Workflow::shared_;
+std::string Workflow::header_, Workflow::cycle1_, Workflow::cycle2_, Workflow::model_, Workflow::fit_stdout_;
+
+TEST_F(Workflow, SimulatedCsvHasTheDocumentedColumnsAndSplitsIntoTwoCycles) {
+  EXPECT_TRUE(header_.starts_with("time_s,temp_chamber,temp_x,temp_y,temp_z,gyro_x,gyro_y,gyro_z,drift_x"))
+      << header_;
+  const auto first = split_lines(read_file(cycle1_));
+  const auto second = split_lines(read_file(cycle2_));
+  EXPECT_EQ(first.size(), 1 + static_cast<std::size_t>(kCycleSeconds));  // 1 Hz
+  EXPECT_GE(second.size(), static_cast<std::size_t>(kCycleSeconds));
+}
+
+TEST_F(Workflow, FitJsonIsOneObjectWithThreeAxes) {
+  const auto json = nlohmann::json::parse(fit_stdout_);  // throws on anything but one JSON document
+  ASSERT_TRUE(json.is_object());
+  ASSERT_EQ(json.at("axes").size(), 3u);
+  const std::vector<std::string> names = {"gyro_x", "gyro_y", "gyro_z"};
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto& axis = json["axes"][a];
+    EXPECT_EQ(axis.at("name"), names[a]);
+    EXPECT_EQ(axis.at("model"), "linear");
+    EXPECT_TRUE(axis.contains("params"));
+    EXPECT_TRUE(axis.contains("evaluations"));
+    EXPECT_TRUE(axis.contains("seconds"));
+    EXPECT_LT(axis.at("mse_after").get<double>(), axis.at("mse_before").get<double>());
+  }
+}
+
+TEST_F(Workflow, EvaluateOnTheSecondCycleBeatsNoModel) {
+  const auto result = thermodrift(*shared_, "evaluate --model model.json --data cycle2.csv --json");
+  ASSERT_EQ(result.status, 0) << result.err;
+  EXPECT_EQ(result.err, "");
+  nlohmann::json json;
+  ASSERT_NO_THROW(json = nlohmann::json::parse(result.out)) << result.out;  // nothing but the JSON
+  ASSERT_TRUE(json.is_object());
+  ASSERT_TRUE(json.at("axes").is_array());
+  ASSERT_EQ(json["axes"].size(), 3u);
+  for (const auto& axis : json["axes"]) {
+    ASSERT_TRUE(axis.contains("name"));
+    const double before = axis.at("mse_before").get<double>();
+    const double after = axis.at("mse_after").get<double>();
+    EXPECT_TRUE(std::isfinite(before) && std::isfinite(after));
+    EXPECT_GT(after, 0.0);
+    EXPECT_LT(after, before) << axis.dump();
+  }
+}
+
+TEST_F(Workflow, EvaluateWithoutJsonPrintsATable) {
+  const auto result = thermodrift(*shared_, "evaluate --model model.json --data cycle2.csv");
+  ASSERT_EQ(result.status, 0) << result.err;
+  EXPECT_TRUE(contains(result.out, "gyro_x")) << result.out;
+  EXPECT_THROW(static_cast<void>(nlohmann::json::parse(result.out)), nlohmann::json::parse_error);
+}
+
+TEST_F(Workflow, CompensateWritesEveryRowPlusOneColumnPerAxis) {
+  const auto input = copy(cycle2_, "in.csv");
+  const auto model = copy(model_, "model.json");
+  const auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
+  ASSERT_EQ(result.status, 0) << result.err;
+  const auto in_lines = split_lines(read_file(input));
+  const auto out_lines = split_lines(read_file(dir_.file("out.csv")));
+  ASSERT_EQ(out_lines.size(), in_lines.size());
+  EXPECT_EQ(out_lines[0], in_lines[0] + ",gyro_x_comp_dph,gyro_y_comp_dph,gyro_z_comp_dph");
+  const auto columns = static_cast<std::size_t>(std::count(in_lines[0].begin(), in_lines[0].end(), ',')) + 1;
+  // gyro_x is column 6, its compensation column `columns + 1`: the compensated rate
+  // varies far less than the raw rate once warmed up.
+  double raw_sum = 0, raw_sq = 0, comp_sum = 0, comp_sq = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 1; i < in_lines.size(); ++i) {
+    ASSERT_TRUE(out_lines[i].starts_with(in_lines[i] + ",")) << "line " << i + 1;
+    std::vector<std::string> cells;
+    std::stringstream row(out_lines[i]);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    ASSERT_EQ(cells.size(), columns + 3) << "line " << i + 1;
+    if (i < 1000) continue;
+    const double raw = std::stod(cells[5]);
+    const double comp = std::stod(cells[columns]);
+    ASSERT_TRUE(std::isfinite(comp));
+    raw_sum += raw, raw_sq += raw * raw, comp_sum += comp, comp_sq += comp * comp, ++n;
+  }
+  const double raw_var = raw_sq / n - (raw_sum / n) * (raw_sum / n);
+  const double comp_var = comp_sq / n - (comp_sum / n) * (comp_sum / n);
+  EXPECT_LT(comp_var, 0.5 * raw_var) << comp_var << " vs " << raw_var;
+  EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"in.csv", "model.json", "out.csv"}));
+}
+
+// --- the error contract ---
+
+const std::string kSmallHeader = "time_s,temp,gyro_x\n";
+
+std::string small_log(std::size_t rows) {
+  std::string text = kSmallHeader;
+  for (std::size_t i = 0; i < rows; ++i) text += std::to_string(i) + ",20,1\n";
+  return text;
+}
+
+const std::string kSmallColumns = " --gyro gyro_x --temp temp --smooth 1";
+
+TEST(CliErrors, BadCellIsExit3NamingFileLineAndColumn) {
+  TempDir dir;
+  std::string text = small_log(50);
+  text.replace(text.find("\n3,20,1\n") + 1, 6, "3,20,1x");  // line 5, column 3
+  dir.write("bad.csv", text);
+  const auto result = thermodrift(dir, "fit --data bad.csv" + kSmallColumns + " --out model.json");
+  EXPECT_EQ(result.status, 3) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "bad.csv:5:3: '1x' is not a number")) << result.err;
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"bad.csv"});  // no model, no temporary
+}
+
+TEST(CliErrors, TimeBackwardsIsExit3NamingFileLineAndColumn) {
+  TempDir dir;
+  std::string text = small_log(50);
+  text.replace(text.find("\n7,20,1\n") + 1, 1, "2");  // line 9 says t = 2 after t = 6
+  dir.write("back.csv", text);
+  const auto result = thermodrift(dir, "fit --data back.csv" + kSmallColumns + " --out model.json");
+  EXPECT_EQ(result.status, 3) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "back.csv:9:1: time goes backwards")) << result.err;
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"back.csv"});
+}
+
+TEST(CliErrors, TimeRepeatedNaNAndMissingColumnAreExit3) {
+  TempDir dir;
+  std::string repeated = small_log(30);
+  repeated.replace(repeated.find("\n5,20,1\n") + 1, 1, "4");
+  dir.write("repeat.csv", repeated);
+  auto result = thermodrift(dir, "fit --data repeat.csv" + kSmallColumns + " --out m.json");
+  EXPECT_EQ(result.status, 3);
+  EXPECT_TRUE(contains(result.err, "repeat.csv:7:1: ")) << result.err;
+  expect_one_line(result);
+
+  std::string nan = small_log(30);
+  nan.replace(nan.find("\n5,20,1\n") + 1, 6, "5,nan,1");
+  dir.write("nan.csv", nan);
+  result = thermodrift(dir, "fit --data nan.csv" + kSmallColumns + " --out m.json");
+  EXPECT_EQ(result.status, 3);
+  EXPECT_TRUE(contains(result.err, "nan.csv:7:2: 'nan' is not a finite number")) << result.err;
+  expect_one_line(result);
+
+  dir.write("ok.csv", small_log(30));
+  result = thermodrift(dir, "fit --data ok.csv --gyro gyro_q --temp temp --out m.json");
+  EXPECT_EQ(result.status, 3);
+  EXPECT_TRUE(contains(result.err, "ok.csv:1: no gyro column named 'gyro_q'")) << result.err;
+  expect_one_line(result);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
+}
+
+TEST(CliErrors, EmptyFileAndOnlyHeaderAreExit3) {
+  TempDir dir;
+  dir.write("empty.csv", "");
+  dir.write("header.csv", kSmallHeader);
+  auto result = thermodrift(dir, "fit --data empty.csv" + kSmallColumns + " --out m.json");
+  EXPECT_EQ(result.status, 3);
+  expect_one_line(result);
+  result = thermodrift(dir, "fit --data header.csv" + kSmallColumns + " --out m.json");
+  EXPECT_EQ(result.status, 3);
+  EXPECT_TRUE(contains(result.err, "header.csv:1: only a header")) << result.err;
+  expect_one_line(result);
+}
+
+TEST(CliErrors, UnknownOptionIsExit2) {
+  TempDir dir;
+  dir.write("ok.csv", small_log(30));
+  const auto result = thermodrift(dir, "fit --data ok.csv" + kSmallColumns + " --out m.json --bogus 3");
+  EXPECT_EQ(result.status, 2) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "--bogus")) << result.err;
+  EXPECT_EQ(result.out, "");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"ok.csv"});
+}
+
+TEST(CliErrors, MissingRequiredOptionIsExit2) {
+  TempDir dir;
+  dir.write("ok.csv", small_log(30));
+  auto result = thermodrift(dir, "fit --data ok.csv" + kSmallColumns);  // no --out
+  EXPECT_EQ(result.status, 2) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "--out")) << result.err;
+
+  result = thermodrift(dir, "evaluate --data ok.csv");  // no --model
+  EXPECT_EQ(result.status, 2) << result.err;
+  expect_one_line(result);
+
+  result = thermodrift(dir, "simulate");  // no --out
+  EXPECT_EQ(result.status, 2) << result.err;
+  expect_one_line(result);
+
+  result = thermodrift(dir, "");  // no subcommand
+  EXPECT_EQ(result.status, 2) << result.err;
+}
+
+TEST(CliErrors, BadOptionValueIsExit2) {
+  TempDir dir;
+  dir.write("ok.csv", small_log(30));
+  const auto result = thermodrift(dir, "fit --data ok.csv" + kSmallColumns + " --gyro-unit furlongs --out m.json");
+  EXPECT_EQ(result.status, 2) << result.err;
+  expect_one_line(result);
+}
+
+TEST_F(Workflow, FailedFitLeavesAnExistingModelUnchanged) {
+  std::string text = small_log(50);
+  text.replace(text.find("\n3,20,1\n") + 1, 6, "3,20,?");
+  dir_.write("bad.csv", text);
+  dir_.write("model.json", "old model\n");
+  const auto result = thermodrift(dir_, "fit --data bad.csv" + kSmallColumns + " --out model.json");
+  EXPECT_EQ(result.status, 3) << result.err;
+  EXPECT_EQ(read_file(dir_.file("model.json")), "old model\n");
+  EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"bad.csv", "model.json"}));
+}
+
+TEST_F(Workflow, CompensateFailingMidStreamLeavesNoOutput) {
+  // Time goes backwards deep into the log, after thousands of rows have been written.
+  auto lines = split_lines(read_file(cycle2_));
+  const std::size_t bad = 15000;  // 0-based index into lines: file line 15001
+  const auto comma = lines[bad].find(',');
+  lines[bad] = "1" + lines[bad].substr(comma);  // t = 1 s
+  std::string text;
+  for (const auto& line : lines) text += line + "\n";
+  dir_.write("in.csv", text);
+  copy(model_, "model.json");
+  auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
+  EXPECT_EQ(result.status, 3) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "in.csv:15001:1: time goes backwards")) << result.err;
+  EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"in.csv", "model.json"}));  // no out.csv, no temporary
+
+  // An earlier output stays as it was.
+  dir_.write("out.csv", "earlier result\n");
+  result = thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
+  EXPECT_EQ(result.status, 3) << result.err;
+  EXPECT_EQ(read_file(dir_.file("out.csv")), "earlier result\n");
+  EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"in.csv", "model.json", "out.csv"}));
+}
+
+TEST_F(Workflow, OutputThatIsTheInputIsRefused) {
+  const auto input = copy(cycle2_, "in.csv");
+  copy(model_, "model.json");
+  const std::string before = read_file(input);
+  for (const std::string& out : std::vector<std::string>{"in.csv", "./in.csv", dir_.file("in.csv")}) {
+    const auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out " + out);
+    EXPECT_EQ(result.status, 2) << out << ": " << result.err;
+    expect_one_line(result);
+    EXPECT_TRUE(contains(result.err, "one of the inputs")) << result.err;
+  }
+  // The model is an input of compensate too.
+  auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out model.json");
+  EXPECT_EQ(result.status, 2) << result.err;
+  // And the data is an input of fit.
+  result = thermodrift(dir_, "fit --data in.csv" + kTemps + " --model linear --out in.csv");
+  EXPECT_EQ(result.status, 2) << result.err;
+  expect_one_line(result);
+  EXPECT_EQ(read_file(input), before);
+  EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"in.csv", "model.json"}));
+}
+
+TEST_F(Workflow, ModelFileErrorsAreExit3) {
+  copy(cycle2_, "in.csv");
+  const std::string text = read_file(model_);
+  dir_.write("cut.json", text.substr(0, text.size() / 2));
+  auto result = thermodrift(dir_, "evaluate --model cut.json --data in.csv --json");
+  EXPECT_EQ(result.status, 3) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "cut.json:")) << result.err;
+  EXPECT_TRUE(contains(result.err, "ends early")) << result.err;
+  EXPECT_EQ(result.out, "");
+
+  auto json = nlohmann::json::parse(text);
+  json["version"] = 99;
+  dir_.write("v99.json", json.dump());
+  result = thermodrift(dir_, "evaluate --model v99.json --data in.csv");
+  EXPECT_EQ(result.status, 3) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "version 99")) << result.err;
+
+  result = thermodrift(dir_, "compensate --model v99.json --data in.csv --out out.csv");
+  EXPECT_EQ(result.status, 3) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_.file("out.csv")));
+}
+
+TEST_F(Workflow, ModelReadingColumnsTheDataLacksIsExit3) {
+  // The same log with gyro_y renamed: the model's column is not there.
+  std::string text = read_file(cycle2_);
+  text.replace(text.find("gyro_y"), 6, "rate_y");
+  dir_.write("renamed.csv", text);
+  copy(model_, "model.json");
+  const auto result = thermodrift(dir_, "evaluate --model model.json --data renamed.csv");
+  EXPECT_EQ(result.status, 3) << result.err;
+  expect_one_line(result);
+  EXPECT_TRUE(contains(result.err, "renamed.csv:1: no gyro column named 'gyro_y'")) << result.err;
+}
+
+}  // namespace
+}  // namespace thermodrift
