@@ -26,7 +26,7 @@ struct SvrOptions {
   double tolerance = 1e-3;        // stopping tolerance on the maximal KKT violation (libsvm -e)
   double cache_mb = 200;          // kernel-column cache budget in MiB (libsvm -m); at least two columns are kept
   bool shrinking = true;          // drop variables that sit at a bound from the working set (libsvm -h 1)
-  long max_iterations = 400'000; // cap on SMO steps (2-4 s at n = 2271, C = 1e4, γ = 100: docs/svr.md); reaching it gives SvrTermination::iteration_limit
+  long max_iterations = 400'000; // cap on SMO steps (~1 s of CPU at n = 2271, C = 1e4, γ = 100: docs/svr.md); reaching it gives SvrTermination::iteration_limit
   int threads = 1;                // threads for kernel columns inside one fit (used only for long columns)
 
   // True when every field is usable; otherwise false with a one-line reason in *error.
