@@ -1,11 +1,14 @@
 // thermodrift fit: one drift model per gyro axis, written to one model file.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
+#include <thread>
 
 #include "commands.hpp"
 #include "data_options.hpp"
 #include "output.hpp"
+#include "progress.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/tune/calibration.hpp"
 
@@ -24,6 +27,13 @@ struct FitArguments {
   double rate_span = 0;
   std::size_t decimate = 0;
   std::vector<std::string> features{"dT", "rate"};
+  std::string tune;
+  std::string objective = "cv";
+  std::uint64_t seed = 1;
+  int threads = 0;
+  long evaluations = 49;
+  int folds = 5;
+  bool tune_epsilon = false;
   std::string out;
   bool json = false;
 };
@@ -48,14 +58,38 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     }
     options.svr.epsilon = args.epsilon;
     options.svr.tolerance = args.tolerance;
+    // The seed's method tunes C and σ; fixed values are used only when both are given.
+    const bool fixed = app.count("--C") && (app.count("--sigma") || app.count("--gamma"));
+    if (!args.tune.empty() || !fixed) {
+      SvrTuningOptions tuning;
+      tuning.method = parse_tune_method(args.tune.empty() ? "afsa" : args.tune);
+      tuning.objective = parse_tune_objective(args.objective);
+      tuning.seed = args.seed;
+      tuning.threads = args.threads > 0 ? args.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+      tuning.evaluations = args.evaluations;
+      tuning.folds = args.folds;
+      tuning.tune_epsilon = args.tune_epsilon;
+      tuning.epsilon = args.epsilon;
+      tuning.solver = options.svr;
+      std::string why;
+      if (!tuning.IsValid(&why)) throw UsageError(why);
+      options.tuning = tuning;
+    }
+  } else if (!args.tune.empty()) {
+    throw UsageError("--tune applies to --model svr");
   }
+  ProgressPrinter progress("thermodrift fit");
+  std::size_t axis_count = 1;
+  options.tuning_progress = [&](std::size_t axis, const optim::Progress& p) { return progress.tuning(axis, axis_count, p); };
   Calibration calibration;
   if (args.data.format == "libsvm") {
     if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
     calibration = calibrate_libsvm(read_libsvm(args.data.files.front()), args.data.files.front(), options);
   } else {
     const LogSpec spec = args.data.spec();
-    calibration = calibrate(args.data.read(spec), spec, options);
+    const auto logs = args.data.read(spec);
+    axis_count = logs.front().axes();
+    calibration = calibrate(logs, spec, options);
   }
   save_drift_model(calibration.model, args.out, args.data.files);
 
@@ -70,6 +104,12 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     entry["evaluations"] = axis.fit.value("evaluations", 1);
     entry["seconds"] = calibration.axes[a].seconds;
     entry["training_samples"] = calibration.axes[a].training_samples;
+    if (axis.fit.contains("tuning")) {
+      const auto& tuning = axis.fit["tuning"];
+      entry["tuning"] = {{"method", tuning["method"]}, {"objective", tuning["objective"]},
+                         {"objective_mse", tuning["objective_mse"]}, {"optimistic", tuning["optimistic"]},
+                         {"seconds", tuning["seconds"]}};
+    }
     axes.push_back(entry);
   }
   result["axes"] = axes;
@@ -98,6 +138,17 @@ Command add_fit(CLI::App& parent) {
   app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
       ->check(CLI::PositiveNumber);
   app->add_option("--features", args->features, "feature terms (default dT,rate)")->delimiter(',');
+  app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
+      ->check(CLI::IsMember({"afsa", "grid", "random"}));
+  app->add_option("--objective", args->objective,
+                  "tuning objective: cv (blocked k-fold, default), holdout (last 30 %), train (in-sample, optimistic)")
+      ->check(CLI::IsMember({"cv", "holdout", "train"}));
+  app->add_option("--evaluations", args->evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(CLI::PositiveNumber);
+  app->add_option("--folds", args->folds, "folds of the blocked cross-validation (default 5)")->check(CLI::Range(2, 100));
+  app->add_flag("--tune-epsilon", args->tune_epsilon, "tune ε as well");
+  app->add_option("--seed", args->seed, "seed of the tuner's random choices");
+  app->add_option("--threads", args->threads, "threads for tuning (default: all cores); results do not depend on it")
+      ->check(CLI::PositiveNumber);
   app->add_option("--out", args->out, "model file to write")->required();
   app->add_flag("--json", args->json, "print one JSON object on stdout");
   return {app, [args, app] { return run_fit(*args, *app); }};

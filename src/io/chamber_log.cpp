@@ -195,6 +195,11 @@ bool read_sample(CsvReader& reader, const CsvRow& row, const LogColumns& columns
 
 ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec) {
   CsvReader reader(path, spec.csv);
+  return read_chamber_log(reader, spec);
+}
+
+ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec) {
+  const std::string& path = reader.path();
   const LogColumns columns = resolve_columns(spec, reader);
 
   ChamberLog log;

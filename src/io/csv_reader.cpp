@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <fstream>
 
 #include "thermodrift/error.hpp"
 
@@ -91,14 +92,19 @@ double parse_cell(std::string_view cell, const std::string& file, std::size_t li
 }
 
 CsvReader::CsvReader(std::string path, CsvOptions options)
-    : path_(std::move(path)), options_(options), stream_(path_, std::ios::binary) {
-  if (!stream_) throw DataError(path_, 0, 0, "cannot open the file for reading");
+    : path_(std::move(path)), options_(options), stream_(std::make_unique<std::ifstream>(path_, std::ios::binary)) {
+  if (!*stream_) throw DataError(path_, 0, 0, "cannot open the file for reading");
+  learn_dialect();
+}
+
+CsvReader::CsvReader(std::unique_ptr<std::istream> input, std::string name, CsvOptions options)
+    : path_(std::move(name)), options_(options), stream_(std::move(input)) {
   learn_dialect();
 }
 
 bool CsvReader::read_line(std::string& line) {
-  if (!std::getline(stream_, line)) {
-    if (stream_.bad()) throw DataError(path_, line_number_ + 1, 0, "read error");
+  if (!std::getline(*stream_, line)) {
+    if (stream_->bad()) throw DataError(path_, line_number_ + 1, 0, "read error");
     return false;
   }
   ++line_number_;
@@ -203,7 +209,7 @@ std::optional<CsvRow> CsvReader::next() {
       const bool first_row = rows_returned_ == 0 && dropped_rows_.empty();
       bool last_row = false;
       if (!first_row && lookahead_.empty()) {
-        const auto here = stream_.tellg();
+        const auto here = stream_->tellg();
         const auto line_here = line_number_;
         std::string peek;
         bool more = false;
@@ -214,8 +220,8 @@ std::optional<CsvRow> CsvReader::next() {
           }
         }
         last_row = !more;
-        stream_.clear();
-        stream_.seekg(here);
+        stream_->clear();
+        stream_->seekg(here);
         line_number_ = line_here;
       }
       if (first_row || last_row) {

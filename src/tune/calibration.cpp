@@ -91,7 +91,7 @@ std::size_t minimum_samples(const std::string& model, std::size_t terms) {
 
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
-                      bool standardize) {
+                      bool standardize, std::size_t axis) {
   FittedModel fitted;
   fitted.fit = {{"terms", terms}};
   if (options.model == "linear") {
@@ -108,11 +108,45 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     SvrModel svr;
     svr.scaling = standardize ? Standardization::of(features, target)
                               : Standardization::identity(features.cols());
-    const SvrTrainer trainer(options.svr);
-    const SvrFit result = trainer.train(svr.scaling.features(features), svr.scaling.target(target));
+    const Eigen::MatrixXd scaled_features = svr.scaling.features(features);
+    const Eigen::VectorXd scaled_target = svr.scaling.target(target);
+    SvrOptions solver = options.svr;
+    long evaluations = 1;
+    if (options.tuning) {
+      SvrTuningOptions tuning = *options.tuning;
+      if (options.tuning_progress) {
+        tuning.progress = [&](const optim::Progress& progress) { return options.tuning_progress(axis, progress); };
+      }
+      const SvrTuningResult tuned = tune_svr(scaled_features, scaled_target, tuning);
+      if (tuned.termination == optim::Termination::stopped_by_callback) throw Interrupted("tuning stopped");
+      solver = tuned.solver;
+      evaluations = tuned.evaluations;
+      nlohmann::json history = nlohmann::json::array();
+      for (const auto& point : tuned.history) {
+        history.push_back({{"evaluations", point.evaluations},
+                           {"best_value", point.best_value * svr.scaling.target_scale * svr.scaling.target_scale}});
+      }
+      fitted.fit["tuning"] = {{"method", to_string(tuning.method)},
+                              {"objective", to_string(tuned.objective)},
+                              {"optimistic", tuned.optimistic},
+                              {"folds", tuning.folds},
+                              {"objective_mse", tuned.objective_value * svr.scaling.target_scale * svr.scaling.target_scale},
+                              {"objective_unit", "(deg/h)^2"},
+                              {"fits", tuned.fits},
+                              {"capped_fits", tuned.capped_fits},
+                              {"seconds", tuned.seconds},
+                              {"seed", tuning.seed},
+                              {"box", {{"C", {tuning.C_min, tuning.C_max}},
+                                       {"sigma", {tuning.sigma_min, tuning.sigma_max}},
+                                       {"epsilon", tuning.tune_epsilon ? nlohmann::json{tuning.epsilon_min, tuning.epsilon_max}
+                                                                       : nlohmann::json(tuning.epsilon)}}},
+                              {"history", history}};
+    }
+    const SvrTrainer trainer(solver);
+    const SvrFit result = trainer.train(scaled_features, scaled_target);
     svr.function = result.function;
-    svr.C = options.svr.C;
-    svr.epsilon = options.svr.epsilon;
+    svr.C = solver.C;
+    svr.epsilon = solver.epsilon;
     svr.converged = result.summary.termination == SvrTermination::converged;
     fitted.fit["params"] = {{"C", svr.C}, {"sigma", svr.sigma()}, {"gamma", svr.function.gamma}, {"epsilon", svr.epsilon}};
     fitted.fit["standardized"] = standardize;
@@ -120,7 +154,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                             {"iterations", result.summary.iterations},
                             {"support_vectors", result.summary.support_vectors},
                             {"dual_objective", result.summary.dual_objective}};
-    fitted.fit["evaluations"] = 1;
+    fitted.fit["evaluations"] = evaluations;
     fitted.model = std::move(svr);
   } else {
     throw UsageError(fmt::format("unknown model '{}' (expected linear, stepwise or svr)", options.model));
@@ -203,7 +237,8 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
 
     const FeatureTable training = feature_table(logs, pipeline, axis, true);
     require_samples(training, pipeline, logs, minimum_samples(options.model, pipeline.terms.size()));
-    FittedModel fitted = fit_model(training.features, training.target, pipeline.term_names(), options, true);
+    FittedModel fitted =
+        fit_model(training.features, training.target, pipeline.term_names(), options, true, axis);
     axis_model.model = std::move(fitted.model);
     nlohmann::json fit = std::move(fitted.fit);
 

@@ -59,6 +59,8 @@ struct ChamberLog {
 // Reads a whole log. Every malformed cell, row or time stamp is a DataError naming
 // file, line and column.
 ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec);
+// The same from an open reader (a stream, say).
+ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec);
 
 // Rows [begin, end) of a log, as a log of their own (a held-out cycle, say).
 ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end);

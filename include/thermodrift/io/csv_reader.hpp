@@ -4,7 +4,8 @@
 #pragma once
 
 #include <cstddef>
-#include <fstream>
+#include <istream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -42,6 +43,8 @@ class CsvReader {
   // header, number of columns. Throws DataError if the file cannot be read or holds no
   // data row.
   explicit CsvReader(std::string path, CsvOptions options = {});
+  // The same over any seekable stream; `name` stands for the file in messages.
+  CsvReader(std::unique_ptr<std::istream> input, std::string name, CsvOptions options = {});
 
   const std::string& path() const { return path_; }
   char delimiter() const { return delimiter_; }
@@ -81,7 +84,7 @@ class CsvReader {
 
   std::string path_;
   CsvOptions options_;
-  std::ifstream stream_;
+  std::unique_ptr<std::istream> stream_;
   std::size_t line_number_ = 0;
   char delimiter_ = ',';
   std::vector<std::string> header_;

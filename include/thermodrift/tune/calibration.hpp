@@ -14,6 +14,7 @@
 #include "thermodrift/models/metrics.hpp"
 #include "thermodrift/models/model_file.hpp"
 #include "thermodrift/models/svr.hpp"
+#include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
 
@@ -24,6 +25,9 @@ struct CalibrationOptions {
   std::optional<std::size_t> decimation;   // default: about 10 samples per smoothing window
   std::vector<std::string> terms{"dT", "rate"};  // feature terms (the seed's pair)
   SvrOptions svr;                          // C, gamma, epsilon, tolerance for --model svr (standardized units)
+  std::optional<SvrTuningOptions> tuning;  // tune C, σ (and ε) per axis instead of using `svr`'s
+  // Progress of the tuning of axis `axis` (0-based); returning false stops the run.
+  std::function<bool(std::size_t axis, const optim::Progress&)> tuning_progress;
 };
 
 // Which temperature channel feeds each axis: one channel for all axes, or one per axis.
@@ -52,9 +56,10 @@ struct FittedModel {
   std::variant<LinearModel, SvrModel> model;
   nlohmann::json fit;
 };
+// `axis` labels tuning progress.
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
-                      bool standardize);
+                      bool standardize, std::size_t axis = 0);
 std::size_t minimum_samples(const std::string& model, std::size_t terms);
 
 // libsvm-format data is used exactly as given: no smoothing, no pipeline, no scaling, so

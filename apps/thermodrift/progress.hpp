@@ -1,0 +1,29 @@
+// Progress of long work on stderr: a one-line bar redrawn in place when stderr is a
+// terminal, plain lines (at most one a second) otherwise. stdout is never touched.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <string>
+
+#include "thermodrift/optim/optimizer.hpp"
+
+namespace thermodrift::cli {
+
+class ProgressPrinter {
+ public:
+  explicit ProgressPrinter(std::string what);
+  ~ProgressPrinter();  // ends a bar with a newline
+
+  // Shows the tuning of axis `axis` of `axes`; returns false once Ctrl-C was pressed,
+  // which stops the optimizer.
+  bool tuning(std::size_t axis, std::size_t axes, const optim::Progress& progress);
+
+ private:
+  std::string what_;
+  bool terminal_;
+  bool drawn_ = false;
+  std::chrono::steady_clock::time_point last_line_{};
+};
+
+}  // namespace thermodrift::cli
