@@ -23,6 +23,8 @@ Command add_fit(CLI::App& parent);
 Command add_evaluate(CLI::App& parent);
 Command add_compensate(CLI::App& parent);
 Command add_demo(CLI::App& parent);
+Command add_report(CLI::App& parent);
+Command add_export(CLI::App& parent);
 
 std::vector<Command> register_commands(CLI::App& app);
 int run_selected(const std::vector<Command>& commands);
