@@ -1,0 +1,272 @@
+// compensate_bench: prediction speed of our compensator against libsvm's svm-predict on
+// the same model and samples, and `thermodrift compensate` streaming a 50 Hz, 3-axis,
+// 24-hour log (rows per second, peak resident memory of the child). One command, one
+// table; `--quick` for a smaller run. See bench/README.md and docs/export.md.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "thermodrift/compensate/c_export.hpp"
+#include "thermodrift/compensate/compensator.hpp"
+#include "thermodrift/models/model_file.hpp"
+#include "thermodrift/models/svr.hpp"
+#include "thermodrift/sim/simulator.hpp"
+
+namespace fs = std::filesystem;
+using namespace thermodrift;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+ChamberLog as_log(const sim::ChamberRun& run) {
+  ChamberLog log;
+  log.time = run.column("time_s");
+  for (const char* axis : {"x", "y", "z"}) {
+    log.gyro_names.push_back(std::string("gyro_") + axis);
+    log.gyro.push_back(run.column(std::string("gyro_") + axis));
+    log.temperature_names.push_back(std::string("temp_") + axis);
+    log.temperature.push_back(run.column(std::string("temp_") + axis));
+  }
+  return log;
+}
+
+// One model per axis on a 1 Hz cycle: the seed's pipeline, linear or ε-SVR with fixed
+// C = 10, γ = 0.5, ε = 0.05 (standardized units), as the export test fits them.
+DriftModel fit(const ChamberLog& log, const std::string& kind) {
+  DriftModel model;
+  model.time_column = "time_s";
+  for (std::size_t a = 0; a < log.axes(); ++a) {
+    AxisModel axis;
+    axis.name = log.gyro_names[a];
+    axis.gyro_column = log.gyro_names[a];
+    axis.temperature_column = log.temperature_names[a];
+    axis.pipeline.decimation = 10;
+    axis.pipeline.reference_temperature = 20;
+    axis.kind = kind;
+    const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
+    if (kind == "linear") {
+      axis.model = fit_least_squares(table.features, table.target, linear_regressors(2));
+    } else {
+      SvrModel svr;
+      svr.scaling = Standardization::of(table.features, table.target);
+      SvrTrainer trainer(SvrOptions{.C = 10, .gamma = 0.5, .epsilon = 0.05});
+      svr.function = trainer.train(svr.scaling.features(table.features), svr.scaling.target(table.target)).function;
+      svr.C = 10;
+      svr.epsilon = 0.05;
+      axis.model = std::move(svr);
+    }
+    model.axes.push_back(std::move(axis));
+  }
+  return model;
+}
+
+struct ChildRun {
+  int status = -1;
+  double seconds = 0;
+  long peak_rss_kb = 0;
+};
+
+// fork/exec + wait4: wall time and the child's own peak resident set size.
+ChildRun run_child(const std::vector<std::string>& argv, const std::string& stdout_path) {
+  std::vector<char*> args;
+  for (const auto& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
+  args.push_back(nullptr);
+  std::fflush(stdout);  // the child must not inherit (and print again) our buffered output
+  const auto start = Clock::now();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (std::freopen(stdout_path.c_str(), "w", stdout) == nullptr) _exit(126);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+  ChildRun run;
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  run.seconds = seconds_since(start);
+  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  run.peak_rss_kb = usage.ru_maxrss;
+  return run;
+}
+
+// libsvm's model format for our ε-SVR: f = Σ coef·K − rho, so rho = −bias.
+void write_libsvm_model(const RbfDecisionFunction& function, const std::string& path) {
+  std::ofstream out(path);
+  out << "svm_type epsilon_svr\nkernel_type rbf\n";
+  out << fmt::format("gamma {:.17g}\nnr_class 2\ntotal_sv {}\nrho {:.17g}\nSV\n", function.gamma,
+                     function.support_vectors.rows(), -function.bias);
+  for (Eigen::Index k = 0; k < function.support_vectors.rows(); ++k) {
+    out << fmt::format("{:.17g}", function.coefficients(k));
+    for (Eigen::Index j = 0; j < function.support_vectors.cols(); ++j) {
+      out << fmt::format(" {}:{:.17g}", j + 1, function.support_vectors(k, j));
+    }
+    out << '\n';
+  }
+}
+
+std::string self_directory() { return fs::canonical("/proc/self/exe").parent_path().string(); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--quick") {
+      quick = true;
+    } else {
+      std::fprintf(stderr, "usage: compensate_bench [--quick]\n");
+      return 2;
+    }
+  }
+  const fs::path dir = fs::temp_directory_path() / fmt::format("thermodrift-compensate-bench-{}", getpid());
+  fs::create_directories(dir);
+  const std::string binary = self_directory() + "/thermodrift";
+
+  // ---- (a) predictions per second: ours vs svm-predict, same model and samples ----
+  sim::SimulatorOptions training;
+  training.cycles = 1;
+  training.rate_hz = 1.0;
+  const ChamberLog training_log = as_log(sim::simulate(training));
+  const DriftModel svr_model = fit(training_log, "svr");
+  const DriftModel linear_model = fit(training_log, "linear");
+  const auto& axis = svr_model.axes.front();
+  const auto& svr = std::get<SvrModel>(axis.model);
+  const FeatureTable table = build_feature_table(axis.pipeline, training_log, 0, 0, false);
+  const Eigen::Index repeat = quick ? 1 : 5;
+  Eigen::MatrixXd features(table.features.rows() * repeat, table.features.cols());
+  for (Eigen::Index r = 0; r < repeat; ++r) features.middleRows(r * table.features.rows(), table.features.rows()) = table.features;
+  const Eigen::MatrixXd standardized = svr.scaling.features(features);
+  const auto n = static_cast<std::size_t>(features.rows());
+
+  fmt::print("compensate_bench{}: SVR model C=10 gamma=0.5 eps=0.05 on a simulated 1 Hz cycle\n",
+             quick ? " --quick" : "");
+  fmt::print("{}", model_size(svr_model).table());
+  fmt::print("\n{:<52} {:>12} {:>14} {:>10}\n", "(a) prediction, axis x, same samples", "samples", "per sample", "ratio");
+
+  // Ours: SvrModel::predict on raw features (standardization included), repeated to >= 1 s.
+  std::vector<double> ours(n);
+  double our_seconds = 0;
+  std::size_t our_predictions = 0;
+  const auto start = Clock::now();
+  do {
+    std::vector<double> row(static_cast<std::size_t>(features.cols()));
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < row.size(); ++j) row[j] = features(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+      ours[i] = svr.predict(row);
+    }
+    our_predictions += n;
+    our_seconds = seconds_since(start);
+  } while (our_seconds < 1.0);
+  const double our_per_sample = our_seconds / static_cast<double>(our_predictions);
+
+  // libsvm: standardized samples and model in its formats; svm-predict end to end.
+  const std::string model_path = (dir / "svr.model").string();
+  const std::string data_path = (dir / "samples.libsvm").string();
+  const std::string predictions_path = (dir / "predictions.txt").string();
+  write_libsvm_model(svr.function, model_path);
+  {
+    std::ofstream data(data_path);
+    for (Eigen::Index i = 0; i < standardized.rows(); ++i) {
+      data << 0;
+      for (Eigen::Index j = 0; j < standardized.cols(); ++j) data << fmt::format(" {}:{:.17g}", j + 1, standardized(i, j));
+      data << '\n';
+    }
+  }
+  const ChildRun libsvm = run_child({"/usr/bin/svm-predict", data_path, model_path, predictions_path},
+                                    (dir / "svm-predict.out").string());
+  const double libsvm_per_sample = libsvm.seconds / static_cast<double>(n);
+  double largest_difference = 0;
+  {
+    std::ifstream in(predictions_path);
+    double value = 0;
+    for (std::size_t i = 0; i < n && in >> value; ++i) {
+      const double ours_standardized = (ours[i] - svr.scaling.target_mean) / svr.scaling.target_scale;
+      largest_difference = std::max(largest_difference, std::abs(value - ours_standardized));
+    }
+  }
+  // The whole Compensator: 3 axes, pipeline + model, per pushed row.
+  double compensator_per_row = 0;
+  {
+    Compensator compensator(svr_model);
+    std::vector<double> gyro(3), temperature(3);
+    const auto begin = Clock::now();
+    std::size_t rows = 0;
+    double sink = 0;
+    while (seconds_since(begin) < 1.0) {
+      for (std::size_t i = 0; i < training_log.rows(); ++i, ++rows) {
+        for (std::size_t a = 0; a < 3; ++a) {
+          gyro[a] = training_log.gyro[a][i];
+          temperature[a] = training_log.temperature[a][i];
+        }
+        sink += compensator.push(training_log.time[i], gyro, temperature).compensated[0];
+      }
+      compensator.reset();
+    }
+    compensator_per_row = seconds_since(begin) / static_cast<double>(rows);
+    if (sink == 42.0) std::puts("");  // keep the loop
+  }
+  fmt::print("{:<52} {:>12} {:>11.3f} us {:>10}\n", "svm-predict (exec, parse, predict, write)", n,
+             libsvm_per_sample * 1e6, "1.0x");
+  fmt::print("{:<52} {:>12} {:>11.3f} us {:>9.1f}x\n", "ours: SvrModel::predict (standardize + RBF sum)", our_predictions,
+             our_per_sample * 1e6, libsvm_per_sample / our_per_sample);
+  fmt::print("{:<52} {:>12} {:>11.3f} us\n", "ours: Compensator::push, 3 axes (per row)", training_log.rows(),
+             compensator_per_row * 1e6);
+  fmt::print("  svm-predict: {:.3f} s total, exit {}; predictions agree within {:.2g} (standardized units)\n",
+             libsvm.seconds, libsvm.status, largest_difference);
+  fmt::print("  predictions per second: ours {:.3g}, svm-predict {:.3g}\n", 1.0 / our_per_sample,
+             1.0 / libsvm_per_sample);
+
+  // ---- (b) thermodrift compensate streaming a 50 Hz 3-axis log ----
+  sim::SimulatorOptions field;
+  field.rate_hz = 50;
+  field.cycles = quick ? 1 : 4;  // one cycle is 6 h 20 min: 4 cycles > 24 h, > 4 million rows
+  field.seed = 7;
+  const std::string log_path = (dir / "field.csv").string();
+  std::size_t field_rows = 0;
+  double log_hours = 0;
+  {
+    const sim::ChamberRun run = sim::simulate(field);
+    field_rows = run.rows();
+    log_hours = static_cast<double>(field_rows) / field.rate_hz / 3600.0;
+    std::ofstream out(log_path);
+    sim::write_csv(run, out);
+  }
+  const auto log_bytes = fs::file_size(log_path);
+  fmt::print("\n(b) thermodrift compensate: {} rows, {:.1f} h at 50 Hz, 3 axes, {:.0f} MB CSV\n", field_rows,
+             log_hours, static_cast<double>(log_bytes) / 1e6);
+  fmt::print("{:<30} {:>10} {:>14} {:>14}\n", "model", "seconds", "rows/s", "peak RSS");
+  const std::vector<std::pair<std::string, const DriftModel*>> models = {{"linear", &linear_model},
+                                                                         {"svr", &svr_model}};
+  for (const auto& [kind, model] : models) {
+    const std::string model_file = (dir / (kind + ".json")).string();
+    save_drift_model(*model, model_file);
+    const ChildRun run = run_child({binary, "compensate", "--model", model_file, "--data", log_path, "--out",
+                                    (dir / "compensated.csv").string()},
+                                   (dir / "compensate.out").string());
+    fmt::print("{:<30} {:>10.1f} {:>14.0f} {:>11.1f} MB{}\n", kind + (kind == "svr" ? " (SV per axis above)" : ""),
+               run.seconds, static_cast<double>(field_rows) / run.seconds,
+               static_cast<double>(run.peak_rss_kb) / 1024.0, run.status == 0 ? "" : fmt::format("  FAILED exit {}", run.status));
+    fs::remove(dir / "compensated.csv");
+  }
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
+  return 0;
+}
