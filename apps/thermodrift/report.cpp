@@ -12,6 +12,7 @@
 #include "report_command.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/report/report.hpp"
+#include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift::cli {
 
@@ -55,6 +56,11 @@ int run_report(const ReportArguments& args) {
   options.threads = args.threads;
   options.study.calibration.smooth_seconds = args.data.smooth;
   options.study.calibration.svr.threads = std::max(1, args.threads);
+  // SVR + AFSA, as the seed: C and σ tuned per axis by blocked 5-fold CV on the training part.
+  SvrTuningOptions tuning;
+  tuning.threads = std::max(1, options.threads);
+  tuning.seed = options.seed;
+  options.study.calibration.tuning = tuning;
   if (args.split_time) {
     const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time) - log.time.begin();
     options.study.split_row = static_cast<std::size_t>(row);

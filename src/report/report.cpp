@@ -33,8 +33,11 @@ std::string model_label(const ModelStudy& m, std::size_t axis) {
   if (m.model == "stepwise") return "stepwise regression";
   if (m.model == "svr") {
     const auto& fit = m.calibration.model.axes.at(axis).fit;
-    const bool tuned = fit.contains("history") || fit.contains("tuning");
-    return tuned ? "SVR + AFSA" : "SVR (fixed C, σ)";
+    if (fit.contains("tuning") && fit["tuning"].contains("method") && fit["tuning"]["method"].is_string()) {
+      const std::string method = fit["tuning"]["method"].get<std::string>();
+      return "SVR + " + (method == "afsa" ? std::string("AFSA") : method);
+    }
+    return fit.contains("history") ? "SVR + AFSA" : "SVR (fixed C, σ)";
   }
   return m.model;
 }
