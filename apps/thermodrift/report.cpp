@@ -25,6 +25,7 @@ struct ReportArguments {
   std::optional<double> split_time;
   std::uint64_t seed = 1;
   int threads = 1;
+  long evaluations = 100;
 };
 
 // The true drift, when the log carries it: a column drift_<suffix> for every gyro_<suffix>
@@ -60,6 +61,7 @@ int run_report(const ReportArguments& args) {
   SvrTuningOptions tuning;
   tuning.threads = std::max(1, options.threads);
   tuning.seed = options.seed;
+  tuning.evaluations = args.evaluations;
   options.study.calibration.tuning = tuning;
   if (args.split_time) {
     const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time) - log.time.begin();
@@ -134,6 +136,8 @@ Command add_report(CLI::App& parent) {
       ->excludes(fraction);
   app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)");
   app->add_option("--threads", args->threads, "threads for the SVR fits")->check(CLI::PositiveNumber);
+  app->add_option("--evaluations", args->evaluations, "AFSA budget of objective evaluations per axis (default 100)")
+      ->check(CLI::PositiveNumber);
   return {app, [args] { return run_report(*args); }};
 }
 

@@ -78,7 +78,7 @@ class Report : public ::testing::Test {
     ASSERT_EQ(simulated.status, 0) << simulated.err;
     result_ = new testing::CommandResult(testing::run_in(
         *dir_, t + " report --data chamber.csv --time time_s --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z"
-                   " --out out --holdout-fraction 0.5"));
+                   " --out out --holdout-fraction 0.5 --evaluations 12"));
   }
   static void TearDownTestSuite() {
     delete result_;
