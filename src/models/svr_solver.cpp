@@ -466,7 +466,10 @@ void SvrSmo::swap_positions(int a, int b) {
 }
 
 void SvrSmo::shrink() {
-  const auto [largest_up, smallest_low] = violation_bounds(active_size_);
+  // Plain copies, not structured bindings: C++20 lambdas may not capture bindings in clang 14.
+  const auto bounds = violation_bounds(active_size_);
+  const double largest_up = bounds.first;
+  const double smallest_low = bounds.second;
   if (!unshrunk_ && largest_up - smallest_low <= 10 * settings_.tolerance) {
     // Close to the end: bring every sample back once, so that the final checks see them.
     unshrunk_ = true;
