@@ -108,7 +108,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       const auto& tuning = axis.fit["tuning"];
       entry["tuning"] = {{"method", tuning["method"]}, {"objective", tuning["objective"]},
                          {"objective_mse", tuning["objective_mse"]}, {"optimistic", tuning["optimistic"]},
-                         {"seconds", tuning["seconds"]}};
+                         {"seconds", calibration.axes[a].tuning_seconds}};
     }
     axes.push_back(entry);
   }

@@ -120,6 +120,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       const SvrTuningResult tuned = tune_svr(scaled_features, scaled_target, tuning);
       if (tuned.termination == optim::Termination::stopped_by_callback) throw Interrupted("tuning stopped");
       solver = tuned.solver;
+      fitted.tuning_seconds = tuned.seconds;
       evaluations = tuned.evaluations;
       nlohmann::json history = nlohmann::json::array();
       for (const auto& point : tuned.history) {
@@ -134,7 +135,6 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                               {"objective_unit", "(deg/h)^2"},
                               {"fits", tuned.fits},
                               {"capped_fits", tuned.capped_fits},
-                              {"seconds", tuned.seconds},
                               {"seed", tuning.seed},
                               {"box", {{"C", {tuning.C_min, tuning.C_max}},
                                        {"sigma", {tuning.sigma_min, tuning.sigma_max}},
@@ -183,7 +183,6 @@ Calibration calibrate_libsvm(const LabelledData& data, const std::string& source
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   fitted.fit["training_samples"] = report.training_samples;
   fitted.fit["in_sample"] = report.in_sample.to_json();
-  fitted.fit["seconds"] = report.seconds;
   axis.fit = std::move(fitted.fit);
   Calibration calibration;
   calibration.model.axes.push_back(std::move(axis));
@@ -246,10 +245,10 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     const FeatureTable every = feature_table(logs, pipeline, axis, false);
     report.in_sample = residual_metrics(every.target, axis_model.predict(every.features));
     report.training_samples = training.rows();
+    report.tuning_seconds = fitted.tuning_seconds;
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     fit["training_samples"] = report.training_samples;
     fit["in_sample"] = report.in_sample.to_json();
-    fit["seconds"] = report.seconds;
     axis_model.fit = std::move(fit);
     calibration.model.axes.push_back(std::move(axis_model));
     calibration.axes.push_back(report);

@@ -38,6 +38,7 @@ struct AxisCalibration {
   ResidualMetrics in_sample;   // on every ready (undecimated) sample of the training logs
   std::size_t training_samples = 0;  // after decimation
   double seconds = 0;
+  double tuning_seconds = 0;  // of `seconds`, spent tuning (SVR only)
 };
 
 struct Calibration {
@@ -52,9 +53,12 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
 
 // One model of kind options.model fitted to (features, target); `fit` describes how.
 // SVR features and target are standardized inside the model when `standardize`.
+// `fit` goes into the model file, so it holds no timings: the same inputs and seed give
+// the same bytes on every run and with any thread count.
 struct FittedModel {
   std::variant<LinearModel, SvrModel> model;
   nlohmann::json fit;
+  double tuning_seconds = 0;
 };
 // `axis` labels tuning progress.
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,

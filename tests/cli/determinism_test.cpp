@@ -1,0 +1,38 @@
+// The same inputs and seed give byte-identical model files, run after run and with 1 or
+// 2 threads: tuning evaluates in parallel, but its result may not depend on scheduling.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "../support/temp_dir.hpp"
+
+namespace thermodrift::testing {
+namespace {
+
+CommandResult run(const TempDir& dir, const std::string& arguments) {
+  return run_in(dir, std::string("'") + THERMODRIFT_BINARY + "' " + arguments);
+}
+
+TEST(Determinism, TunedSvrModelFileIsByteIdenticalWhateverTheThreadCount) {
+  TempDir dir;
+  ASSERT_EQ(run(dir, "simulate --cycles 1 --rate 0.25 --seed 7 --out log.csv").status, 0);
+  const std::string fit =
+      "fit --data log.csv --gyro gyro_x,gyro_y --temp temp_x,temp_y --model svr --tune afsa "
+      "--evaluations 9 ";
+  for (const char* name : {"one.json", "two.json", "again.json"}) {
+    const std::string threads = std::string(name) == "two.json" ? "2" : "1";
+    const auto result = run(dir, fit + "--seed 3 --threads " + threads + " --out " + name);
+    ASSERT_EQ(result.status, 0) << result.err;
+  }
+  const std::string one = read_file(dir.file("one.json"));
+  ASSERT_NE(one.find("\"tuning\""), std::string::npos);  // it really was tuned
+  EXPECT_EQ(one, read_file(dir.file("two.json")));
+  EXPECT_EQ(one, read_file(dir.file("again.json")));
+
+  // A different seed is a different search: the check above can fail.
+  ASSERT_EQ(run(dir, fit + "--threads 2 --seed 4 --out other.json").status, 0);
+  EXPECT_NE(one, read_file(dir.file("other.json")));
+}
+
+}  // namespace
+}  // namespace thermodrift::testing
