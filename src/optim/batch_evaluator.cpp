@@ -116,6 +116,8 @@ std::vector<double> BatchEvaluator::Evaluate(const std::vector<Eigen::VectorXd>&
     // thread waits and reports each finished evaluation to the callback.
     std::mutex mutex;
     std::condition_variable finished_one;
+    std::condition_variable acknowledged_one;
+    std::size_t acknowledged = 0;
     std::atomic<std::size_t> next{0};
     std::atomic<bool> stop{false};
     std::size_t finished = 0;
@@ -133,7 +135,7 @@ std::vector<double> BatchEvaluator::Evaluate(const std::vector<Eigen::VectorXd>&
           thrown = std::current_exception();
           stop.store(true);
         }
-        std::lock_guard lock(mutex);
+        std::unique_lock lock(mutex);
         if (thrown) {
           if (!error) error = thrown;
         } else {
@@ -142,6 +144,10 @@ std::vector<double> BatchEvaluator::Evaluate(const std::vector<Eigen::VectorXd>&
           ++finished;
         }
         finished_one.notify_one();
+        // Take no new point before the callback has heard of this one, so that a stop
+        // lets at most the evaluations already running finish (one per other worker).
+        const std::size_t mine = finished;
+        acknowledged_one.wait(lock, [&] { return acknowledged >= mine || stop.load() || thrown; });
       }
       std::lock_guard lock(mutex);
       --running;
@@ -164,6 +170,8 @@ std::vector<double> BatchEvaluator::Evaluate(const std::vector<Eigen::VectorXd>&
       Report(provisional_best, evaluations_ + static_cast<long>(reported));
       if (stopped_by_callback_) stop.store(true);
       lock.lock();
+      acknowledged = reported;
+      acknowledged_one.notify_all();
     }
     lock.unlock();
     for (auto& thread : threads) thread.join();
