@@ -97,9 +97,19 @@ LabelledData read_libsvm(std::istream& input, const std::string& name) {
                         fmt::format("bad value '{}': expected a finite number",
                                     token.substr(colon + 1)));
       }
+      if (index > kMaxLibsvmFeatureIndex) {
+        throw DataError(name, line_number, start + 1,
+                        fmt::format("feature index {} is above the supported {} (data are held dense)",
+                                    index, kMaxLibsvmFeatureIndex));
+      }
       previous_index = index;
       if (index > max_index) max_index = index;
       row.entries.emplace_back(index, value);
+    }
+    if (static_cast<long long>(rows.size() + 1) * max_index > kMaxLibsvmDenseCells) {
+      throw DataError(name, line_number, 1,
+                      fmt::format("{} rows x {} features exceed the supported {} dense values",
+                                  rows.size() + 1, max_index, kMaxLibsvmDenseCells));
     }
     rows.push_back(std::move(row));
   }

@@ -11,13 +11,20 @@
 
 namespace thermodrift {
 
+// The data are held dense (drift models have a handful of features), so the reader bounds
+// what a file may ask for: a larger index or a larger dense matrix is a DataError naming
+// the line and column where the bound is crossed, never an allocation that exhausts memory.
+inline constexpr long kMaxLibsvmFeatureIndex = 10'000;
+inline constexpr long long kMaxLibsvmDenseCells = 1LL << 27;  // 1 GiB of doubles
+
 struct LabelledData {
   Eigen::MatrixXd samples;  // one row per line of the file
   Eigen::VectorXd targets;  // the labels
 };
 
 // Throws DataError naming line and column (1-based) on a bad label, a bad or
-// non-increasing index, a missing colon, a bad value, or a file without data lines.
+// non-increasing index, a missing colon, a bad value, an index or dense size above the
+// bounds above, or a file without data lines.
 // Blank lines are skipped.
 LabelledData read_libsvm(const std::string& path);
 // The same from a stream; `name` is the file name used in errors.

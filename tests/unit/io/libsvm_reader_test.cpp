@@ -6,6 +6,8 @@
 
 #include <unistd.h>
 
+#include <fmt/format.h>
+
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/libsvm_reader.hpp"
 
@@ -74,6 +76,26 @@ TEST(LibsvmReader, NonIncreasingIndexNamesLineAndColumn) {
   EXPECT_NE(error.message().find("not greater"), std::string::npos);
   error = error_of("2 3:1 3:2\n");
   EXPECT_EQ(error.column(), 7u);
+}
+
+TEST(LibsvmReader, IndexAboveTheDenseBoundNamesLineAndColumn) {
+  // Found by fuzzing: "0 999999999:1" asked for a 1 x 999,999,999 dense matrix.
+  const DataError error = error_of("1 1:2\n0 2:1 999999999:1\n");
+  EXPECT_EQ(error.line(), 2u);
+  EXPECT_EQ(error.column(), 7u);
+  EXPECT_NE(error.message().find("above the supported"), std::string::npos);
+  const LabelledData data = read_text(fmt::format("1 {}:2\n", kMaxLibsvmFeatureIndex));
+  EXPECT_EQ(data.samples.cols(), kMaxLibsvmFeatureIndex);
+}
+
+TEST(LibsvmReader, TooManyDenseValuesNamesTheLine) {
+  // Rows x largest index past the bound: the line that crosses it is named.
+  const long rows_at_bound = static_cast<long>(kMaxLibsvmDenseCells / kMaxLibsvmFeatureIndex);
+  std::string text = fmt::format("1 {}:1\n", kMaxLibsvmFeatureIndex);
+  for (long r = 1; r <= rows_at_bound; ++r) text += "0\n";
+  const DataError error = error_of(text);
+  EXPECT_EQ(error.line(), static_cast<std::size_t>(rows_at_bound + 1));
+  EXPECT_NE(error.message().find("dense values"), std::string::npos);
 }
 
 TEST(LibsvmReader, MissingColonNamesLineAndColumn) {
