@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/json_integer.hpp"
 
 namespace thermodrift {
 
@@ -119,7 +120,9 @@ LinearModel LinearModel::from_json(const nlohmann::json& json,
   }
   model.coefficients = Eigen::Map<const Eigen::VectorXd>(coefficients.data(),
                                                          static_cast<Eigen::Index>(coefficients.size()));
-  model.rank_deficiency = json.value("rank_deficiency", std::size_t{0});
+  model.rank_deficiency = json.contains("rank_deficiency")
+                              ? json_integer<std::size_t>(json.at("rank_deficiency"), "rank_deficiency")
+                              : 0;
   return model;
 }
 

@@ -8,6 +8,7 @@
 
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
+#include "thermodrift/io/json_integer.hpp"
 
 namespace thermodrift {
 
@@ -63,7 +64,7 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
     if (!json.is_object() || json.value("format", "") != kFormatName) {
       throw fail("not a thermodrift model file (no \"format\": \"thermodrift-model\")");
     }
-    const int version = json.at("version").get<int>();
+    const int version = json_integer<int>(json.at("version"), "version");
     if (version != DriftModel::kFormatVersion) {
       throw fail(fmt::format("model file version {} is not supported (this build reads version {})",
                              version, DriftModel::kFormatVersion));

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <tuple>
 
 #include "../../support/temp_dir.hpp"
 #include "thermodrift/error.hpp"
@@ -129,6 +130,23 @@ TEST(ModelFileErrors, AnotherPipelineVersion) {
   const auto error = load_error(dir.write("p.json", json.dump()));
   EXPECT_TRUE(contains(error.message(), "axis 2")) << error.what();
   EXPECT_TRUE(contains(error.message(), "pipeline version 7")) << error.what();
+}
+
+// Fuzzing found a version of 1e68: read as an int it is undefined behaviour, so integer
+// fields are checked for type and range before they are converted.
+TEST(ModelFileErrors, IntegerFieldsOutOfRangeOrFractional) {
+  TempDir dir;
+  for (const auto& [pointer, value, field] :
+       {std::tuple{"/version", nlohmann::json(1e68), "version"},
+        std::tuple{"/version", nlohmann::json(1.5), "version"},
+        std::tuple{"/axes/0/pipeline/version", nlohmann::json(-1e30), "pipeline version"},
+        std::tuple{"/axes/1/pipeline/decimation", nlohmann::json(-3), "decimation"},
+        std::tuple{"/axes/1/pipeline/decimation", nlohmann::json(2.0), "decimation"}}) {
+    auto json = saved_json(dir);
+    json[nlohmann::json::json_pointer(pointer)] = value;
+    const auto error = load_error(dir.write("bad.json", json.dump(1)));
+    EXPECT_TRUE(contains(error.message(), std::string(field) + " must be an integer from")) << error.what();
+  }
 }
 
 TEST(ModelFileErrors, NotAModelFile) {
