@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/features/terms.hpp"
 
 namespace thermodrift {
 
@@ -41,6 +42,30 @@ std::string comment_safe(std::string text) {
   return text;
 }
 
+// Filter states per axis in the exported state: two per factor (see TermEvaluator).
+std::size_t filter_slots(const DriftModel& model) {
+  std::size_t slots = 1;
+  for (const auto& axis : model.axes) {
+    std::size_t factors = 0;
+    for (const auto& term : axis.pipeline.terms) factors += term.factors.size();
+    slots = std::max(slots, factors);
+  }
+  return slots;
+}
+
+// Per sample cost of the lags of one factor: exp calls and other flops.
+std::pair<std::size_t, std::size_t> factor_cost(const FeatureFactor& factor) {
+  using Kind = FeatureAtom::Kind;
+  const std::size_t powers = static_cast<std::size_t>(factor.power);
+  switch (factor.atom.kind) {
+    case Kind::lag: return {1, 4 + powers};
+    case Kind::lag_rate: return {1, 7 + powers};
+    case Kind::gradient_rate: return {2, 14 + powers};
+    case Kind::direction: return {factor.atom.tau2 > 0 ? 3 : 2, (factor.atom.tau2 > 0 ? 14 : 9) + powers};
+    default: return {0, powers};
+  }
+}
+
 void check_exportable(const DriftModel& model) {
   if (model.axes.empty()) throw UsageError("the model has no axes to export");
   for (const auto& axis : model.axes) {
@@ -48,7 +73,7 @@ void check_exportable(const DriftModel& model) {
       throw UsageError("a model fitted on libsvm-format data has no chamber-log pipeline to export");
     }
     for (const auto& term : axis.pipeline.terms) {
-      if (term.kind == FeatureTerm::Kind::input) {
+      if (term.uses_input()) {
         throw UsageError(fmt::format("axis {}: feature term {} cannot be computed on a device", axis.name,
                                      term.name()));
       }
@@ -176,6 +201,13 @@ ModelSize model_size(const DriftModel& model, bool single_precision) {
     const std::size_t d = axis.features;
     axis.constant_bytes = pipeline_bytes;
     axis.flops_per_sample = kPipelineFlops;
+    for (const auto& term : axis_model.pipeline.terms) {
+      for (const auto& factor : term.factors) {
+        const auto [exps, flops] = factor_cost(factor);
+        axis.exp_per_sample += exps;
+        axis.flops_per_sample += flops;
+      }
+    }
     if (const auto* svr = std::get_if<SvrModel>(&axis_model.model)) {
       const auto sv = static_cast<std::size_t>(svr->function.support_vectors.rows());
       axis.support_vectors = sv;
@@ -184,7 +216,7 @@ ModelSize model_size(const DriftModel& model, bool single_precision) {
       // standardize (2d), per SV: d subtractions, d multiplies, d additions, -γ·s, c·e^…, sum;
       // un-standardize (2)
       axis.flops_per_sample += 2 * d + sv * (3 * d + 3) + 2;
-      axis.exp_per_sample = sv;
+      axis.exp_per_sample += sv;
     } else if (const auto* linear = std::get_if<LinearModel>(&axis_model.model)) {
       axis.regressors = linear->regressors.size();
       axis.constant_bytes += (axis.regressors + 1) * real + axis.regressors * d;  // powers as bytes
@@ -210,7 +242,8 @@ std::size_t exported_state_bytes(const DriftModel& model, const CExportOptions& 
   // A ring entry is a double time and a value (padded to 16 bytes in both precisions on
   // common ABIs); a few counters and times per axis.
   const std::size_t entry = 16;
-  return model.axes.size() * ((mean + history) * entry + 96);
+  const std::size_t real = options.single_precision ? sizeof(float) : sizeof(double);
+  return model.axes.size() * ((mean + history) * entry + 2 * filter_slots(model) * real + 104);
 }
 
 std::string export_c_header(const DriftModel& model, const CExportOptions& options) {
@@ -280,6 +313,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "#define {P}_MAX_RATE_HZ {rate}\n"
       "#define {P}_MEAN_CAPACITY {mean}\n"
       "#define {P}_HISTORY_CAPACITY {history}\n"
+      "#define {P}_FILTERS {filters}\n"
       "#define {P}_SINGLE_PRECISION {single}\n\n"
       "typedef {real} {p}_real;\n\n"
       "typedef struct {{\n"
@@ -302,6 +336,8 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  int started;\n"
       "  double start_time;\n"
       "  double last_time;\n"
+      "  double step_seconds;               /* since the previous sample; 0 at a (re)start */\n"
+      "  {p}_real filters[{P}_FILTERS][2];  /* lag states of the feature terms, two per factor */\n"
       "}} {p}_axis_state;\n\n"
       "typedef struct {{\n"
       "  {p}_axis_state axis[{P}_AXES];\n"
@@ -317,7 +353,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "}} {p}_pipeline;\n\n",
       fmt::arg("P", P), fmt::arg("p", p), fmt::arg("axes", axes), fmt::arg("rate", Literal::time(rate)),
       fmt::arg("mean", mean_capacity), fmt::arg("history", history_capacity),
-      fmt::arg("single", options.single_precision ? 1 : 0),
+      fmt::arg("filters", filter_slots(model)), fmt::arg("single", options.single_precision ? 1 : 0),
       fmt::arg("carry_field", options.single_precision
                                   ? fmt::format("  {}_real mean_carry;                /* Kahan compensation of mean_sum */\n", p)
                                   : std::string()),
@@ -475,6 +511,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  if (axis->started && (time - axis->last_time > pipeline->gap_seconds || !(time > axis->last_time))) {{\n"
       "    {p}_axis_restart(axis);\n"
       "  }}\n"
+      "  axis->step_seconds = axis->started ? time - axis->last_time : 0;\n"
       "  if (!axis->started) {{\n"
       "    axis->started = 1;\n"
       "    axis->start_time = time;\n"
@@ -540,6 +577,39 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       fmt::arg("add_entry", accumulate("axis->mean_sum", "axis->mean_carry",
                                        fmt::format("axis->mean_ring[(axis->mean_head + i) % {}_MEAN_CAPACITY].value", P))));
 
+  // The feature terms' lags: TermEvaluator, operation for operation.
+  out += fmt::format(
+      "/* First-order lag, exact for an input held over the step; a step of 0 (a restart)\n"
+      " * sets the state to the input: the lags start in equilibrium. */\n"
+      "static inline {p}_real {p}_lag({p}_real state, {p}_real input, double step_seconds, double tau) {{\n"
+      "  {p}_real a;\n"
+      "  if (!(step_seconds > 0)) return input;\n"
+      "  a = ({p}_real){exp}(-step_seconds / tau);\n"
+      "  return a * state + (({p}_real)1 - a) * input;\n"
+      "}}\n\n"
+      "/* lagrate:TAU, degC/min: the rate of a TAU-lag of dT (state[0]) */\n"
+      "static inline {p}_real {p}_lag_rate({p}_real* lagged, {p}_real delta_t, double step_seconds, double tau) {{\n"
+      "  *lagged = {p}_lag(*lagged, delta_t, step_seconds, tau);\n"
+      "  return ({p}_real)((delta_t - *lagged) / tau * 60.0);\n"
+      "}}\n\n"
+      "/* gradrate:TAU:TG, degC/min^2: the rate of a TG-lag (state[1]) of lagrate:TAU */\n"
+      "static inline {p}_real {p}_gradient_rate({p}_real state[2], {p}_real delta_t, double step_seconds,\n"
+      "                                          double tau, double tau_gradient) {{\n"
+      "  const {p}_real coil_rate = {p}_lag_rate(&state[0], delta_t, step_seconds, tau);\n"
+      "  state[1] = {p}_lag(state[1], coil_rate, step_seconds, tau_gradient);\n"
+      "  return ({p}_real)((coil_rate - state[1]) / tau_gradient * 60.0);\n"
+      "}}\n\n"
+      "/* dir:TAU[:LAG]: a TAU-lag (state[1]) of tanh(r / {scale} degC/min), tanh through exp;\n"
+      " * r is the smoothed rate, or lagrate:LAG when LAG > 0 */\n"
+      "static inline {p}_real {p}_direction({p}_real state[2], {p}_real delta_t, {p}_real rate,\n"
+      "                                     double step_seconds, double tau, double lag) {{\n"
+      "  const double source = lag > 0 ? (double){p}_lag_rate(&state[0], delta_t, step_seconds, lag) : (double)rate;\n"
+      "  const double x = source / {scale};\n"
+      "  state[1] = {p}_lag(state[1], ({p}_real)(1.0 - 2.0 / (exp(2.0 * x) + 1.0)), step_seconds, tau);\n"
+      "  return state[1];\n"
+      "}}\n\n",
+      fmt::arg("p", p), fmt::arg("exp", exp_name), fmt::arg("scale", Literal::time(kDirectionRateScale)));
+
   out += fmt::format(
       "/* One sample: gyro in deg/h and temperature in degC per axis, time in s (increasing).\n"
       " * Writes gyro - drift per axis to compensated (may alias gyro); returns 1 when ready. */\n"
@@ -566,8 +636,43 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
                  single ? fmt::format("({}_real)(temperature[{}] - {})", p, a,
                                       Literal::time(model.axes[a].pipeline.reference_temperature))
                         : fmt::format("temperature[{}]", a)));
+    std::size_t slot = 0;
     for (std::size_t i = 0; i < terms.size(); ++i) {
-      out += fmt::format("    features[{}] = {};\n", i, terms[i].kind == FeatureTerm::Kind::rate ? "rate" : "delta_t");
+      out += fmt::format("    features[{}] = 1;\n", i);
+      for (const auto& factor : terms[i].factors) {
+        const std::string state = fmt::format("state->axis[{}].filters[{}]", a, slot++);
+        const std::string step = fmt::format("state->axis[{}].step_seconds", a);
+        const FeatureAtom& atom = factor.atom;
+        std::string value;
+        switch (atom.kind) {
+          case FeatureAtom::Kind::delta_t: value = "delta_t"; break;
+          case FeatureAtom::Kind::rate: value = "rate"; break;
+          case FeatureAtom::Kind::lag:
+            out += fmt::format("    {s}[0] = {p}_lag({s}[0], delta_t, {step}, {tau});\n", fmt::arg("s", state),
+                               fmt::arg("p", p), fmt::arg("step", step), fmt::arg("tau", Literal::time(atom.tau)));
+            value = state + "[0]";
+            break;
+          case FeatureAtom::Kind::lag_rate:
+            value = fmt::format("{}_lag_rate(&{}[0], delta_t, {}, {})", p, state, step, Literal::time(atom.tau));
+            break;
+          case FeatureAtom::Kind::gradient_rate:
+            value = fmt::format("{}_gradient_rate({}, delta_t, {}, {}, {})", p, state, step, Literal::time(atom.tau),
+                                Literal::time(atom.tau2));
+            break;
+          case FeatureAtom::Kind::direction:
+            value = fmt::format("{}_direction({}, delta_t, rate, {}, {}, {})", p, state, step, Literal::time(atom.tau),
+                                Literal::time(atom.tau2));
+            break;
+          case FeatureAtom::Kind::input: throw UsageError("libsvm columns cannot be exported");  // check_exportable
+        }
+        if (factor.power == 1) {
+          out += fmt::format("    features[{}] *= {};  /* {} */\n", i, value, atom.name());
+        } else {
+          out += fmt::format("    {{\n      const {}_real v = {};  /* {} */\n", p, value, atom.name());
+          for (int k = 0; k < factor.power; ++k) out += fmt::format("      features[{}] *= v;\n", i);
+          out += "    }\n";
+        }
+      }
     }
     out += fmt::format(
         "    state->drift[{a}] = {p}_axis{a}_drift(features);\n"

@@ -6,27 +6,9 @@
 #include <cmath>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/json_integer.hpp"
 
 namespace thermodrift {
-
-FeatureTerm FeatureTerm::parse(const std::string& text) {
-  if (text == "dT") return {Kind::delta_t};
-  if (text == "rate") return {Kind::rate};
-  if (text.size() > 1 && text[0] == 'x' && text.find_first_not_of("0123456789", 1) == std::string::npos) {
-    const auto column = std::stoul(text.substr(1));
-    if (column >= 1 && column <= 100000) return {Kind::input, column - 1};
-  }
-  throw UsageError(fmt::format("unknown feature term '{}' (known: dT, rate)", text));
-}
-
-std::string FeatureTerm::name() const {
-  switch (kind) {
-    case Kind::delta_t: return "dT";
-    case Kind::rate: return "rate";
-    case Kind::input: return fmt::format("x{}", input_index + 1);
-  }
-  return "?";
-}
 
 double Pipeline::effective_gap_seconds() const {
   return gap_seconds > 0 ? gap_seconds : std::max(smooth_seconds, 10.0);
@@ -59,7 +41,9 @@ Pipeline Pipeline::libsvm_input(std::size_t columns) {
   pipeline.libsvm = true;
   pipeline.smooth_seconds = 0;
   pipeline.terms.clear();
-  for (std::size_t j = 0; j < columns; ++j) pipeline.terms.push_back({FeatureTerm::Kind::input, j});
+  for (std::size_t j = 0; j < columns; ++j) {
+    pipeline.terms.emplace_back(FeatureAtom{FeatureTerm::Kind::input, 0, 0, j});
+  }
   return pipeline;
 }
 
@@ -76,7 +60,7 @@ nlohmann::json Pipeline::to_json() const {
 }
 
 Pipeline Pipeline::from_json(const nlohmann::json& json) {
-  if (json.at("version").get<int>() != kVersion) {
+  if (json_integer<int>(json.at("version"), "pipeline version") != kVersion) {
     throw Error(fmt::format("pipeline version {} is not supported (expected {})",
                             json.at("version").dump(), kVersion));
   }
@@ -94,7 +78,7 @@ Pipeline Pipeline::from_json(const nlohmann::json& json) {
   pipeline.smooth_seconds = json.at("smooth_seconds").get<double>();
   pipeline.rate_span_seconds = json.at("rate_span_seconds").get<double>();
   pipeline.gap_seconds = json.at("gap_seconds").get<double>();
-  pipeline.decimation = json.at("decimation").get<std::size_t>();
+  pipeline.decimation = json_integer<std::size_t>(json.at("decimation"), "decimation");
   pipeline.reference_temperature = json.at("reference_temperature").get<double>();
   pipeline.terms.clear();
   for (const auto& term : json.at("terms")) pipeline.terms.push_back(FeatureTerm::parse(term.get<std::string>()));
@@ -113,6 +97,7 @@ FeatureStream::FeatureStream(const Pipeline& pipeline)
       gyro_mean_(pipeline.smooth_seconds),
       temperature_mean_(pipeline.smooth_seconds),
       history_(),
+      terms_(pipeline.terms),
       features_(pipeline.terms.size()) {
   sample_.features = features_;
 }
@@ -127,6 +112,7 @@ void FeatureStream::reset() {
 
 const FeatureStream::Sample& FeatureStream::push(double time, double gyro, double temperature) {
   if (started_ && time - last_time_ > pipeline_->effective_gap_seconds()) reset();
+  const double step_seconds = started_ ? time - last_time_ : 0.0;  // 0: lags start in equilibrium
   if (!started_) {
     started_ = true;
     start_time_ = time;
@@ -152,19 +138,7 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
   const double elapsed = time - past.time;
   const double rate_per_minute = elapsed > 0 ? (smoothed - past.value) / elapsed * 60.0 : 0.0;
 
-  for (std::size_t i = 0; i < pipeline_->terms.size(); ++i) {
-    switch (pipeline_->terms[i].kind) {
-      case FeatureTerm::Kind::delta_t:
-        features_[i] = smoothed - pipeline_->reference_temperature;
-        break;
-      case FeatureTerm::Kind::rate:
-        features_[i] = rate_per_minute;
-        break;
-      case FeatureTerm::Kind::input:  // libsvm models never stream (Compensator refuses them)
-        features_[i] = 0;
-        break;
-    }
-  }
+  terms_.push(smoothed - pipeline_->reference_temperature, rate_per_minute, step_seconds, features_);
   sample_.ready = time - start_time_ >= pipeline_->warm_up_seconds();
   return sample_;
 }

@@ -13,23 +13,10 @@
 #include <Eigen/Dense>
 
 #include "thermodrift/features/moving_average.hpp"
+#include "thermodrift/features/terms.hpp"
 #include "thermodrift/io/chamber_log.hpp"
 
 namespace thermodrift {
-
-// One input of a drift model, computed causally from the smoothed temperature T_s.
-struct FeatureTerm {
-  enum class Kind {
-    delta_t,  // "dT":   T_s - reference temperature, °C
-    rate,     // "rate": (T_s(t) - T_s(t - rate_span)) / rate_span, °C/min
-    input,    // "xN": column N (1-based) of libsvm-format data, used as given
-  };
-  Kind kind = Kind::delta_t;
-  std::size_t input_index = 0;  // 0-based column, for Kind::input
-
-  static FeatureTerm parse(const std::string& text);  // UsageError on an unknown term
-  std::string name() const;
-};
 
 struct Pipeline {
   static constexpr int kVersion = 1;
@@ -89,6 +76,7 @@ class FeatureStream {
   bool started_ = false;
   double start_time_ = 0;
   double last_time_ = 0;
+  TermEvaluator terms_;
   std::vector<double> features_;
   Sample sample_;
 };

@@ -64,7 +64,7 @@ Pipeline chamber_pipeline() {
 
 // One model per axis fitted on the log: "linear" (quadratic regressors, to exercise
 // powers) or "svr" (fixed C, γ, ε; a few hundred support vectors).
-DriftModel fitted_model(const ChamberLog& log, const std::string& kind) {
+DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const std::vector<std::string>& terms = {}) {
   DriftModel model;
   model.time_column = "time_s";
   for (std::size_t a = 0; a < log.axes(); ++a) {
@@ -73,10 +73,15 @@ DriftModel fitted_model(const ChamberLog& log, const std::string& kind) {
     axis.gyro_column = log.gyro_names[a];
     axis.temperature_column = log.temperature_names[a];
     axis.pipeline = chamber_pipeline();
+    if (!terms.empty()) {
+      axis.pipeline.terms.clear();
+      for (const auto& term : terms) axis.pipeline.terms.push_back(FeatureTerm::parse(term));
+    }
     axis.kind = kind;
     const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
     if (kind == "linear") {
-      axis.model = fit_least_squares(table.features, table.target, quadratic_regressors(2));
+      axis.model = fit_least_squares(table.features, table.target,
+                                     terms.empty() ? quadratic_regressors(2) : linear_regressors(terms.size()));
     } else {
       SvrModel svr;
       svr.scaling = Standardization::of(table.features, table.target);
@@ -250,6 +255,20 @@ TEST_F(CExport, SvrDoubleMatchesCompensator) {
 }
 
 TEST_F(CExport, SvrFloatMatchesCompensator) { expect_matches(*svr_, *log_, true, 1e-5); }
+
+// Every thermal-lag atom, with powers and a product, through a gap: the C filters start in
+// equilibrium and step exactly as the C++ ones do.
+TEST_F(CExport, ThermalLagTermsMatchCompensatorThroughAGap) {
+  const std::vector<std::string> terms = {"dT",          "lag:420", "lag:420^2",   "lagrate:420",
+                                          "gradrate:420:240", "dir:900", "dir:900:420", "dT*rate"};
+  const DriftModel linear = fitted_model(*log_, "linear", terms);
+  const DriftModel svr = fitted_model(*log_, "svr", {"lag:420", "lagrate:420", "dir:900:420"});
+  const ChamberLog cut = without_rows(*log_, 5000, 5600);
+  expect_matches(linear, cut, false, 1e-9);
+  expect_matches(linear, cut, true, 1e-4);
+  expect_matches(svr, cut, false, 1e-9);
+  expect_matches(svr, cut, true, 1e-4);
+}
 
 TEST_F(CExport, WarmUpAndGapRestartLikeTheCompensator) {
   // 600 s missing in the middle of a ramp: longer than the 100 s gap threshold.

@@ -249,9 +249,9 @@ TEST(PipelineJson, RejectsWhatDoesNotFit) {
 }
 
 TEST(FeatureTerm, ParsesKnownNames) {
-  EXPECT_EQ(FeatureTerm::parse("dT").kind, FeatureTerm::Kind::delta_t);
-  EXPECT_EQ(FeatureTerm::parse("rate").kind, FeatureTerm::Kind::rate);
-  EXPECT_EQ(FeatureTerm::parse("x3").input_index, 2u);
+  EXPECT_TRUE(FeatureTerm::parse("dT").is_atom(FeatureTerm::Kind::delta_t));
+  EXPECT_TRUE(FeatureTerm::parse("rate").is_atom(FeatureTerm::Kind::rate));
+  EXPECT_EQ(FeatureTerm::parse("x3").factors.at(0).atom.input_index, 2u);
   EXPECT_THROW(FeatureTerm::parse("x0"), UsageError);
   EXPECT_THROW(FeatureTerm::parse("dt"), UsageError);
 }

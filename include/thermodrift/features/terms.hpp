@@ -1,0 +1,93 @@
+// Feature terms: what a drift model sees of an axis' temperature history. Every term is
+// causal: its value at t depends on samples at or before t only, so the model fitted in
+// the lab runs unchanged on the device.
+//
+// Atoms, computed from the smoothed temperature T_s (ΔT = T_s - reference):
+//   dT               ΔT, °C                                                (seed)
+//   rate             (T_s(t) - T_s(t - span)) / span, °C/min                (seed)
+//   lag:TAU          L, a first-order lag of ΔT:  TAU·dL/dt = ΔT - L, °C    (coil temperature)
+//   lagrate:TAU      dL/dt = (ΔT - L)/TAU, °C/min                           (coil rate; its gap to
+//                    the sensor, ΔT - L, is TAU times this)
+//   gradrate:TAU:TG  the rate of G, a lag (TG) of lagrate:TAU: (lagrate - G)/TG, °C/min²
+//                    (the Shupe term: the radial gradient follows the coil rate with a lag)
+//   dir:TAU[:LAG]    a lag (TAU) of tanh(r / 0.2 °C/min), r the smoothed rate, or
+//                    lagrate:LAG when given: a heating (+1) / cooling (-1) memory, unitless
+//   xN               column N of libsvm-format data, as given (never streamed)
+// A term is one atom or a product of atoms with powers: "dT^2", "dT*rate", "lag:600^2*rate".
+//
+// Lags start in equilibrium (L = ΔT, G = lagrate, the memory at its input) at the first
+// sample and after every gap; each step is exact for an input held over the step:
+// L ← a·L + (1 - a)·ΔT, a = exp(-dt/TAU).
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace thermodrift {
+
+// r0 of dir: rates well above it (ramps) saturate the indicator, soaks bring it to 0.
+inline constexpr double kDirectionRateScale = 0.2;  // °C/min
+
+struct FeatureAtom {
+  enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input };
+  Kind kind = Kind::delta_t;
+  double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory)
+  double tau2 = 0;              // s: gradrate (gradient lag); dir (lag of its rate, 0: smoothed rate)
+  std::size_t input_index = 0;  // 0-based column, for Kind::input
+
+  std::string name() const;
+  bool operator==(const FeatureAtom&) const = default;
+};
+
+struct FeatureFactor {
+  FeatureAtom atom;
+  int power = 1;  // 1..4
+  bool operator==(const FeatureFactor&) const = default;
+};
+
+struct FeatureTerm {
+  using Kind = FeatureAtom::Kind;
+  std::vector<FeatureFactor> factors;
+
+  FeatureTerm() = default;
+  explicit FeatureTerm(FeatureAtom atom) : factors{{atom, 1}} {}
+  explicit FeatureTerm(Kind kind) : FeatureTerm(FeatureAtom{kind}) {}
+
+  // UsageError naming the term and what was expected.
+  static FeatureTerm parse(const std::string& text);
+  std::string name() const;
+  // The kind of a plain atom (one factor, power 1); Kind::input also for libsvm columns.
+  bool is_atom(Kind kind) const { return factors.size() == 1 && factors[0].power == 1 && factors[0].atom.kind == kind; }
+  bool uses_input() const;
+  bool operator==(const FeatureTerm&) const = default;
+};
+
+// The streaming state of a list of terms: two filter states per factor, no allocation
+// after construction.
+class TermEvaluator {
+ public:
+  explicit TermEvaluator(const std::vector<FeatureTerm>& terms);
+
+  // One sample: ΔT (°C) and rate (°C/min) of the smoothed temperature, `step_seconds`
+  // since the previous sample (0 at the first sample after a (re)start, which sets every
+  // lag in equilibrium). Writes one value per term.
+  void push(double delta_t, double rate, double step_seconds, std::span<double> values);
+
+ private:
+  struct State {
+    double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG)
+    double second = 0;  // G (gradrate) or the direction memory (dir)
+  };
+  double atom_value(const FeatureAtom& atom, State& state, double delta_t, double rate, double step_seconds);
+
+  const std::vector<FeatureTerm>* terms_;
+  std::vector<State> states_;  // one per factor, in order
+};
+
+// First-order lag update exact for an input held over the step; `step_seconds` 0 sets
+// the state to the input (equilibrium). Shared by the evaluator and its tests.
+double lag_step(double state, double input, double step_seconds, double tau);
+
+}  // namespace thermodrift

@@ -1,0 +1,188 @@
+#include "thermodrift/features/terms.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <string_view>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+
+namespace {
+
+constexpr std::string_view kKnownTerms =
+    "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], products A*B and powers A^2";
+constexpr double kMaxTimeConstant = 1e6;  // s; eleven days is no thermal lag of a gyro
+constexpr int kMaxPower = 4;
+
+[[noreturn]] void bad_term(const std::string& text, const std::string& why) {
+  throw UsageError(fmt::format("feature term '{}': {} (known: {})", text, why, kKnownTerms));
+}
+
+std::vector<std::string_view> split(std::string_view text, char separator) {
+  std::vector<std::string_view> parts;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t end = text.find(separator, start);
+    parts.push_back(text.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start));
+    if (end == std::string_view::npos) return parts;
+    start = end + 1;
+  }
+}
+
+double parse_time_constant(const std::string& term, std::string_view text) {
+  const std::string token(text);
+  char* end = nullptr;
+  errno = 0;
+  const double value = token.empty() ? 0 : std::strtod(token.c_str(), &end);
+  if (token.empty() || end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value) ||
+      value <= 0 || value > kMaxTimeConstant) {
+    bad_term(term, fmt::format("time constant '{}' must be a number of seconds in (0, {:g}]", token, kMaxTimeConstant));
+  }
+  return value;
+}
+
+FeatureAtom parse_atom(const std::string& term, std::string_view text) {
+  using Kind = FeatureAtom::Kind;
+  if (text == "dT") return {Kind::delta_t};
+  if (text == "rate") return {Kind::rate};
+  if (text.size() > 1 && text[0] == 'x' && text.find_first_not_of("0123456789", 1) == std::string_view::npos &&
+      text.size() <= 7) {
+    const auto column = std::stoul(std::string(text.substr(1)));
+    if (column >= 1) return {Kind::input, 0, 0, column - 1};
+  }
+  const auto parts = split(text, ':');
+  const std::string_view head = parts.front();
+  if (head == "lag" || head == "lagrate") {
+    if (parts.size() != 2) bad_term(term, fmt::format("{} takes one time constant: {}:TAU", head, head));
+    return {head == "lag" ? Kind::lag : Kind::lag_rate, parse_time_constant(term, parts[1])};
+  }
+  if (head == "gradrate") {
+    if (parts.size() != 3) bad_term(term, "gradrate takes two time constants: gradrate:TAU:TG");
+    return {Kind::gradient_rate, parse_time_constant(term, parts[1]), parse_time_constant(term, parts[2])};
+  }
+  if (head == "dir") {
+    if (parts.size() != 2 && parts.size() != 3) bad_term(term, "dir takes one or two time constants: dir:TAU[:LAG]");
+    return {Kind::direction, parse_time_constant(term, parts[1]),
+            parts.size() == 3 ? parse_time_constant(term, parts[2]) : 0.0};
+  }
+  bad_term(term, fmt::format("unknown atom '{}'", text));
+}
+
+double tanh_by_exp(double x) {
+  // tanh through exp alone, as the exported C header computes it (no libm beyond exp).
+  return 1.0 - 2.0 / (std::exp(2.0 * x) + 1.0);
+}
+
+}  // namespace
+
+std::string FeatureAtom::name() const {
+  switch (kind) {
+    case Kind::delta_t: return "dT";
+    case Kind::rate: return "rate";
+    case Kind::lag: return fmt::format("lag:{}", tau);
+    case Kind::lag_rate: return fmt::format("lagrate:{}", tau);
+    case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", tau, tau2);
+    case Kind::direction: return tau2 > 0 ? fmt::format("dir:{}:{}", tau, tau2) : fmt::format("dir:{}", tau);
+    case Kind::input: return fmt::format("x{}", input_index + 1);
+  }
+  return "?";
+}
+
+FeatureTerm FeatureTerm::parse(const std::string& text) {
+  FeatureTerm term;
+  for (const std::string_view factor_text : split(text, '*')) {
+    const auto pieces = split(factor_text, '^');
+    if (pieces.size() > 2) bad_term(text, "one power per factor");
+    FeatureFactor factor{parse_atom(text, pieces[0]), 1};
+    if (pieces.size() == 2) {
+      if (pieces[1].size() != 1 || pieces[1][0] < '1' || pieces[1][0] > '0' + kMaxPower) {
+        bad_term(text, fmt::format("power '{}' must be 1..{}", pieces[1], kMaxPower));
+      }
+      factor.power = pieces[1][0] - '0';
+    }
+    term.factors.push_back(factor);
+  }
+  if (term.uses_input() && !(term.factors.size() == 1 && term.factors[0].power == 1)) {
+    bad_term(text, "libsvm columns xN are used as given, not in products or powers");
+  }
+  return term;
+}
+
+std::string FeatureTerm::name() const {
+  std::string text;
+  for (const auto& factor : factors) {
+    if (!text.empty()) text += '*';
+    text += factor.atom.name();
+    if (factor.power != 1) text += fmt::format("^{}", factor.power);
+  }
+  return text;
+}
+
+bool FeatureTerm::uses_input() const {
+  for (const auto& factor : factors) {
+    if (factor.atom.kind == Kind::input) return true;
+  }
+  return false;
+}
+
+double lag_step(double state, double input, double step_seconds, double tau) {
+  if (!(step_seconds > 0)) return input;
+  const double a = std::exp(-step_seconds / tau);
+  return a * state + (1.0 - a) * input;
+}
+
+TermEvaluator::TermEvaluator(const std::vector<FeatureTerm>& terms) : terms_(&terms) {
+  std::size_t factors = 0;
+  for (const auto& term : terms) factors += term.factors.size();
+  states_.resize(factors);
+}
+
+double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, double delta_t, double rate,
+                                 double step_seconds) {
+  using Kind = FeatureAtom::Kind;
+  switch (atom.kind) {
+    case Kind::delta_t: return delta_t;
+    case Kind::rate: return rate;
+    case Kind::lag:
+      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      return state.first;
+    case Kind::lag_rate:
+      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      return (delta_t - state.first) / atom.tau * 60.0;
+    case Kind::gradient_rate: {
+      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      const double coil_rate = (delta_t - state.first) / atom.tau * 60.0;
+      state.second = lag_step(state.second, coil_rate, step_seconds, atom.tau2);
+      return (coil_rate - state.second) / atom.tau2 * 60.0;
+    }
+    case Kind::direction: {
+      double source = rate;
+      if (atom.tau2 > 0) {
+        state.first = lag_step(state.first, delta_t, step_seconds, atom.tau2);
+        source = (delta_t - state.first) / atom.tau2 * 60.0;
+      }
+      state.second = lag_step(state.second, tanh_by_exp(source / kDirectionRateScale), step_seconds, atom.tau);
+      return state.second;
+    }
+    case Kind::input: return 0;  // libsvm models never stream (Compensator refuses them)
+  }
+  return 0;
+}
+
+void TermEvaluator::push(double delta_t, double rate, double step_seconds, std::span<double> values) {
+  std::size_t s = 0;
+  for (std::size_t i = 0; i < terms_->size(); ++i) {
+    double value = 1;
+    for (const auto& factor : (*terms_)[i].factors) {
+      const double atom = atom_value(factor.atom, states_[s++], delta_t, rate, step_seconds);
+      for (int p = 0; p < factor.power; ++p) value *= atom;
+    }
+    values[i] = value;
+  }
+}
+
+}  // namespace thermodrift

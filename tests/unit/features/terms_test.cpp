@@ -1,0 +1,128 @@
+// Feature terms against closed forms: the exact step response of a first-order lag, the
+// steady lag of a ramp, equilibrium at every (re)start, and the parser's round trip and
+// refusals.
+#include "thermodrift/features/terms.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "thermodrift/error.hpp"
+
+namespace thermodrift {
+namespace {
+
+std::vector<FeatureTerm> parse_all(const std::vector<std::string>& names) {
+  std::vector<FeatureTerm> terms;
+  for (const auto& name : names) terms.push_back(FeatureTerm::parse(name));
+  return terms;
+}
+
+TEST(FeatureTerms, NamesRoundTrip) {
+  for (const std::string name : {"dT", "rate", "lag:600", "lagrate:420", "gradrate:420:240", "dir:900",
+                                 "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3"}) {
+    EXPECT_EQ(FeatureTerm::parse(name).name(), name);
+  }
+  const auto term = FeatureTerm::parse("gradrate:420:240");
+  ASSERT_EQ(term.factors.size(), 1u);
+  EXPECT_EQ(term.factors[0].atom.kind, FeatureAtom::Kind::gradient_rate);
+  EXPECT_EQ(term.factors[0].atom.tau, 420);
+  EXPECT_EQ(term.factors[0].atom.tau2, 240);
+  EXPECT_TRUE(FeatureTerm::parse("rate").is_atom(FeatureAtom::Kind::rate));
+  EXPECT_FALSE(FeatureTerm::parse("rate^2").is_atom(FeatureAtom::Kind::rate));
+}
+
+TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
+  for (const std::string bad : {"", "lag", "lag:", "lag:0", "lag:-5", "lag:abc", "lag:1e7", "lag:nan", "lag:300:2",
+                                "gradrate:400", "dir", "dir:1:2:3", "dT^5", "dT^0", "dT^2^2", "dT^", "foo", "dT*",
+                                "x0", "x3^2", "x3*dT", "rate:60"}) {
+    try {
+      FeatureTerm::parse(bad);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const UsageError& error) {
+      EXPECT_NE(std::string(error.what()).find("'" + bad + "'"), std::string::npos) << error.what();
+    }
+  }
+}
+
+// A first-order lag fed a held input is exact at any step: after a unit step at t = 0 it
+// reads 1 - exp(-t/TAU) at every sample, however unevenly the samples fall.
+TEST(FeatureTerms, LagIsExactForAStepWhateverTheSampling) {
+  const double tau = 300;
+  const auto terms = parse_all({"lag:300", "lagrate:300"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(2);
+  evaluator.push(0, 0, 0, values);  // equilibrium at 0
+  EXPECT_EQ(values[0], 0);
+  EXPECT_EQ(values[1], 0);
+  double t = 0;
+  for (const double step : {0.1, 7.0, 33.3, 1.0, 250.0, 0.01, 600.0, 12.0}) {
+    t += step;
+    evaluator.push(1.0, 0, step, values);
+    const double expected = 1 - std::exp(-t / tau);
+    EXPECT_NEAR(values[0], expected, 1e-14) << "t = " << t;
+    EXPECT_NEAR(values[1], (1 - expected) / tau * 60, 1e-14) << "t = " << t;  // °C/min
+  }
+}
+
+// On a ramp r the discrete lag settles r·h·a/(1 - a) behind the input (a = exp(-h/TAU)),
+// which is TAU·r to first order in h/TAU; lagrate then reads the ramp's rate, the
+// gradient's rate settles to 0, and the direction memory to tanh(rate / 0.2 °C/min).
+TEST(FeatureTerms, RampSettlesToItsClosedForm) {
+  const double tau = 400, h = 5, r = 0.5 / 60;  // °C/s: 0.5 °C/min
+  const double a = std::exp(-h / tau);
+  const double behind = r * h * a / (1 - a);
+  const auto terms = parse_all({"lag:400", "lagrate:400", "gradrate:400:200", "dir:300", "dir:300:400"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(terms.size());
+  for (int k = 0; k <= 20000; ++k) {  // 250 TAU
+    evaluator.push(r * k * h, r * 60, k == 0 ? 0 : h, values);
+  }
+  const double t = 20000 * h;
+  EXPECT_NEAR(values[0], r * t - behind, 1e-9);
+  EXPECT_NEAR(behind, r * tau, r * h);
+  EXPECT_NEAR(values[1], behind / tau * 60, 1e-9);
+  EXPECT_NEAR(values[1], r * 60, r * 60 * h / tau);
+  EXPECT_NEAR(values[2], 0, 1e-9);
+  EXPECT_NEAR(values[3], std::tanh(r * 60 / kDirectionRateScale), 1e-12);
+  EXPECT_NEAR(values[4], std::tanh(values[1] / kDirectionRateScale), 1e-9);
+}
+
+// A step of 0 is a (re)start: every state goes to equilibrium with the current input, so a
+// log that resumes after a gap does not carry a stale coil temperature across it.
+TEST(FeatureTerms, RestartSetsEveryStateInEquilibrium) {
+  const auto terms = parse_all({"lag:600", "lagrate:600", "gradrate:600:300", "dir:900", "dT", "rate"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(terms.size());
+  for (int k = 0; k < 100; ++k) evaluator.push(0.1 * k, 6, k == 0 ? 0 : 60, values);
+  EXPECT_NEAR(values[1], 0.1, 0.01);  // following the 0.1 °C/min ramp
+  evaluator.push(-3.0, -0.4, 0, values);
+  EXPECT_EQ(values[0], -3.0);
+  EXPECT_EQ(values[1], 0);
+  EXPECT_EQ(values[2], 0);
+  EXPECT_NEAR(values[3], std::tanh(-0.4 / kDirectionRateScale), 1e-15);
+  EXPECT_EQ(values[4], -3.0);
+  EXPECT_EQ(values[5], -0.4);
+}
+
+// A product is the product of its atoms' streams, each with its own state.
+TEST(FeatureTerms, ProductsAndPowersMultiplyTheAtoms) {
+  const auto atoms = parse_all({"lag:300", "rate", "dir:200"});
+  const auto products = parse_all({"lag:300^2*rate", "dir:200*lag:300", "rate^3"});
+  TermEvaluator atom_evaluator(atoms), product_evaluator(products);
+  std::vector<double> a(3), p(3);
+  for (int k = 0; k < 500; ++k) {
+    const double t = 10.0 * k;
+    const double delta_t = 5 * std::sin(t / 2000), rate = 0.15 * std::cos(t / 2000) * 60 / 2000 * 60;
+    atom_evaluator.push(delta_t, rate, k == 0 ? 0 : 10, a);
+    product_evaluator.push(delta_t, rate, k == 0 ? 0 : 10, p);
+    EXPECT_DOUBLE_EQ(p[0], a[0] * a[0] * a[1]);
+    EXPECT_DOUBLE_EQ(p[1], a[2] * a[0]);
+    EXPECT_DOUBLE_EQ(p[2], a[1] * a[1] * a[1]);
+  }
+}
+
+}  // namespace
+}  // namespace thermodrift
