@@ -2,6 +2,7 @@
 // two chamber cycles (-40..60 °C, 1 °C/min, 1 Hz), every model fitted on the first
 // cycle and judged on the second, written up as DIR/report.html.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <chrono>
 #include <filesystem>
@@ -19,6 +20,7 @@ namespace thermodrift::cli {
 namespace {
 
 struct DemoArguments {
+  std::vector<std::string> features;  // besides the seed's pair; empty: the pair only
   std::string out = "thermodrift-demo";
   std::uint64_t seed = 1;
   int threads = 2;
@@ -63,11 +65,13 @@ int run_demo(const DemoArguments& args) {
   tuning.threads = std::max(1, options.threads);
   tuning.seed = options.seed;
   options.study.calibration.tuning = tuning;
+  options.study.other_terms = args.features;
   options.study.split_row = run.cycle_start_rows().back();
   options.study.split_description = fmt::format("fitted on chamber cycle 1, held out: cycle 2 (from t = {:g} s)",
                                                 run.cycle_start_rows().back() / run.rate_hz);
   options.title = "thermodrift demo — simulated 3-axis FOG, two chamber cycles";
   options.command_line = fmt::format("thermodrift demo --out {} --seed {}", args.out, args.seed);
+  if (!args.features.empty()) options.command_line += fmt::format(" --features {}", fmt::join(args.features, ","));
   for (const char* name : {"drift_x", "drift_y", "drift_z"}) options.true_drift.push_back(run.column(name));
   options.earlier_steps = {{"simulate and write the log", simulate_seconds}, {"read the log", seconds_since(read_start)}};
   options.progress = progress;
@@ -87,6 +91,7 @@ Command add_demo(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand("demo", "the seed's study on a simulated two-cycle chamber test, as an HTML report");
   app->add_option("--out", args->out, "folder for the log, models and report (default thermodrift-demo)");
   app->add_option("--seed", args->seed, "simulator seed");
+  app->add_option("--features", args->features, "feature terms to compare with the seed's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
   app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(CLI::PositiveNumber);
   return {app, [args] { return run_demo(*args); }};
 }

@@ -1,6 +1,7 @@
 // thermodrift report: the seed's whole study on a user's log, as DIR/report.html and
 // DIR/summary.json (docs/report.md).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -19,6 +20,7 @@ namespace thermodrift::cli {
 namespace {
 
 struct ReportArguments {
+  std::vector<std::string> features;  // besides the seed's pair; empty: the pair only
   DataOptions data;
   std::string out;
   std::optional<double> holdout_fraction;
@@ -63,6 +65,7 @@ int run_report(const ReportArguments& args) {
   tuning.seed = options.seed;
   tuning.evaluations = args.evaluations;
   options.study.calibration.tuning = tuning;
+  options.study.other_terms = args.features;
   if (args.split_time) {
     const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time) - log.time.begin();
     options.study.split_row = static_cast<std::size_t>(row);
@@ -76,6 +79,7 @@ int run_report(const ReportArguments& args) {
   options.true_drift = read_true_drift(args.data.files.front(), spec, log);
   options.title = "thermodrift report — " + log.source;
   options.command_line = fmt::format("thermodrift report --data {} --out {}", log.source, args.out);
+  if (!args.features.empty()) options.command_line += fmt::format(" --features {}", fmt::join(args.features, ","));
   options.earlier_steps.emplace_back(
       "read the log", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   options.progress = progress_printer("thermodrift report", start);
@@ -135,6 +139,7 @@ Command add_report(CLI::App& parent) {
                                    "hold out the log from this time (s) on")
       ->excludes(fraction);
   app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)");
+  app->add_option("--features", args->features, "feature terms to compare with the seed's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
   app->add_option("--threads", args->threads, "threads for the SVR fits")->check(CLI::PositiveNumber);
   app->add_option("--evaluations", args->evaluations, "AFSA budget of objective evaluations per axis (default 100)")
       ->check(CLI::PositiveNumber);

@@ -144,6 +144,29 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
   table(page, summary["tables"]["in_sample"], floor_known, "Table 1 — in-sample (fitted and judged on the training part, as the paper reports)");
   table(page, summary["tables"]["held_out"], floor_known, "Table 2 — held-out (judged on the later part the models never saw)");
 
+  if (summary.contains("feature_selection") && !summary["feature_selection"].empty()) {
+    page << "<h2>Feature selection</h2>\n<p>Terms chosen per axis on the training part by greedy forward selection, "
+            "scored by blocked cross-validation in time; a term is kept only if it cuts the CV MSE by more than "
+         << num(100.0 * summary["feature_selection"][0]["selection"]["min_gain"].get<double>())
+         << " %, then each time constant is searched (docs/features.md).</p>\n";
+    for (const auto& entry : summary["feature_selection"]) {
+      const auto& selection = entry["selection"];
+      page << "<table><caption>" << escape(entry["label"].get<std::string>()) << ", "
+           << escape(entry["axis"].get<std::string>()) << " (scored by " << escape(selection["scored_by"].get<std::string>())
+           << ", " << selection["candidates_scored"].get<std::size_t>() << " candidate sets)</caption>\n"
+           << "<tr><th>step</th><th>term</th><th>CV MSE, (°/h)²</th></tr>\n"
+           << "<tr><td>start</td><td>constant</td><td>" << num(selection["start_mse"]) << "</td></tr>\n";
+      for (const auto& step : selection["path"]) {
+        page << "<tr><td>" << escape(step["action"].get<std::string>()) << "</td><td><code>"
+             << escape(step["term"].get<std::string>()) << "</code></td><td>" << num(step["cv_mse"]) << "</td></tr>\n";
+      }
+      std::string terms;
+      for (const auto& t : selection["terms"]) terms += (terms.empty() ? "" : ", ") + t.get<std::string>();
+      page << "<tr><td><b>chosen</b></td><td><code>" << escape(terms) << "</code></td><td>" << num(selection["cv_mse"])
+           << "</td></tr>\n</table>\n";
+    }
+  }
+
   if (!summary["cross_axis"].empty()) {
     page << "<h2>Cross-axis experiment</h2>\n<table><caption>SVR trained on the other axes, tested on the one left out "
             "(held-out part)</caption>\n<tr><th>left out</th><th>trained on</th><th>original MSE</th>"

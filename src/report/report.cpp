@@ -28,7 +28,16 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
+std::string model_kind_label(const ModelStudy& m, std::size_t axis);
+
+// "SVR + AFSA", with the feature terms when they are not the seed's pair.
 std::string model_label(const ModelStudy& m, std::size_t axis) {
+  const std::string kind = model_kind_label(m, axis);
+  if (m.features == "dT,rate") return kind;
+  return kind + (m.features == "auto" ? ", chosen features" : ", " + m.features);
+}
+
+std::string model_kind_label(const ModelStudy& m, std::size_t axis) {
   if (m.model == "linear") return "linear regression";
   if (m.model == "stepwise") return "stepwise regression";
   if (m.model == "svr") {
@@ -123,13 +132,13 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   auto start = Clock::now();
   result.study = run_study(log, spec, study_options);
   Study& study = result.study;
-  for (const auto& m : study.models) timings.emplace_back("fit " + m.model + " (all axes) and evaluate", m.seconds);
+  for (const auto& m : study.models) timings.emplace_back("fit " + model_label(m, 0) + " (all axes) and evaluate", m.seconds);
 
   const std::size_t axes = log.axes();
   const bool known_drift = options.true_drift.size() == axes && axes > 0;
   std::size_t svr_index = study.models.size();
   for (std::size_t m = 0; m < study.models.size(); ++m) {
-    if (study.models[m].model == "svr") svr_index = m;
+    if (study.models[m].model == "svr" && svr_index == study.models.size()) svr_index = m;  // the seed's pair
   }
 
   // Cross-axis experiment with the SVR's options.
@@ -267,7 +276,9 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     if (std::find(order.begin(), order.end(), m) == order.end()) order.push_back(m);
   }
   nlohmann::json columns = nlohmann::json::array();
-  for (auto m : order) columns.push_back({{"model", study.models[m].model}, {"label", model_label(study.models[m], 0)}});
+  for (auto m : order) columns.push_back({{"model", study.models[m].model},
+                                       {"features", study.models[m].features},
+                                       {"label", model_label(study.models[m], 0)}});
   nlohmann::json tables;
   for (const bool is_held_out : {false, true}) {
     nlohmann::json rows = nlohmann::json::array();
@@ -283,6 +294,8 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
         const auto& metrics = is_held_out ? study.models[m].held_out[a] : study.models[m].in_sample[a];
         nlohmann::json cell = metrics_cell(metrics, floors[a]);
         cell["model"] = study.models[m].model;
+        cell["features"] = study.models[m].features;
+        cell["terms"] = study.models[m].calibration.model.axes[a].pipeline.term_names();
         cells.push_back(cell);
       }
       row["models"] = cells;
@@ -291,6 +304,20 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     tables[is_held_out ? "held_out" : "in_sample"] = {{"columns", columns}, {"rows", rows}};
   }
   summary["tables"] = tables;
+
+  // How each model chose its terms, axis by axis (--features auto).
+  nlohmann::json selections = nlohmann::json::array();
+  for (const auto& m : study.models) {
+    for (std::size_t a = 0; a < axes; ++a) {
+      const auto& fit = m.calibration.model.axes[a].fit;
+      if (!fit.contains("feature_selection")) continue;
+      selections.push_back({{"model", m.model},
+                            {"label", model_label(m, a)},
+                            {"axis", log.gyro_names[a]},
+                            {"selection", fit["feature_selection"]}});
+    }
+  }
+  summary["feature_selection"] = selections;
 
   nlohmann::json cross_json = nlohmann::json::array();
   for (const auto& c : cross) {

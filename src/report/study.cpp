@@ -1,6 +1,7 @@
 #include "thermodrift/report/study.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <chrono>
 #include <cmath>
@@ -20,7 +21,7 @@ nlohmann::json Study::to_json() const {
                       {"held_out", m.held_out[a].to_json()},
                       {"fit", axis.fit}});
     }
-    models_json.push_back({{"model", m.model}, {"seconds", m.seconds}, {"axes", axes}});
+    models_json.push_back({{"model", m.model}, {"features", m.features}, {"seconds", m.seconds}, {"axes", axes}});
   }
   return {{"split", {{"row", split_row}, {"time_s", split_time}, {"description", split_description}}},
           {"models", models_json}};
@@ -42,20 +43,29 @@ Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& 
   study.split_time = log.time[study.split_row];
   if (!options.split_description.empty()) study.split_description = options.split_description;
   const std::vector<ChamberLog> training{slice_rows(log, 0, study.split_row)};
-  const std::vector<ChamberLog> held_out{slice_rows(log, study.split_row, log.rows())};
-
-  for (const auto& name : options.models) {
-    if (options.progress) options.progress(fmt::format("fitting {} on {} rows", name, training.front().rows()));
-    const auto start = std::chrono::steady_clock::now();
-    ModelStudy entry;
-    entry.model = name;
-    CalibrationOptions calibration_options = options.calibration;
-    calibration_options.model = name;
-    entry.calibration = calibrate(training, spec, calibration_options);
-    for (const auto& axis : entry.calibration.axes) entry.in_sample.push_back(axis.in_sample);
-    entry.held_out = evaluate(entry.calibration.model, held_out);
-    entry.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    study.models.push_back(std::move(entry));
+  std::vector<std::vector<std::string>> feature_sets{options.calibration.terms};
+  if (!options.other_terms.empty() && options.other_terms != options.calibration.terms) {
+    feature_sets.push_back(options.other_terms);
+  }
+  for (const auto& terms : feature_sets) {
+    for (const auto& name : options.models) {
+      const std::string features = fmt::format("{}", fmt::join(terms, ","));
+      if (options.progress) {
+        options.progress(fmt::format("fitting {} ({}) on {} rows", name, features, training.front().rows()));
+      }
+      const auto start = std::chrono::steady_clock::now();
+      ModelStudy entry;
+      entry.model = name;
+      entry.features = features;
+      CalibrationOptions calibration_options = options.calibration;
+      calibration_options.model = name;
+      calibration_options.terms = terms;
+      entry.calibration = calibrate(training, spec, calibration_options);
+      for (const auto& axis : entry.calibration.axes) entry.in_sample.push_back(axis.in_sample);
+      entry.held_out = evaluate_from(entry.calibration.model, log, study.split_row);
+      entry.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      study.models.push_back(std::move(entry));
+    }
   }
   return study;
 }

@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 
 #include "thermodrift/error.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/svr_model.hpp"
+#include "thermodrift/tune/feature_selection.hpp"
 
 namespace thermodrift {
 
@@ -52,7 +54,9 @@ Pipeline make_pipeline(const std::vector<ChamberLog>& logs, std::size_t axis,
   pipeline.decimation =
       options.decimation.value_or(default_decimation(options.smooth_seconds, median_sample_interval(logs.front())));
   pipeline.terms.clear();
-  for (const auto& term : options.terms) pipeline.terms.push_back(FeatureTerm::parse(term));
+  // "auto": the seed's pair until select_features replaces it.
+  const auto terms = chooses_features(options) ? std::vector<std::string>{"dT", "rate"} : options.terms;
+  for (const auto& term : terms) pipeline.terms.push_back(FeatureTerm::parse(term));
   // ΔT is measured from the mean temperature of the training logs.
   double sum = 0;
   std::size_t count = 0;
@@ -82,6 +86,10 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
 }
 
 }  // namespace
+
+bool chooses_features(const CalibrationOptions& options) {
+  return options.terms.size() == 1 && options.terms.front() == "auto";
+}
 
 std::size_t minimum_samples(const std::string& model, std::size_t terms) {
   if (model == "linear") return terms + 2;
@@ -232,6 +240,19 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                                         : spec.temperature_columns[channel];
     axis_model.pipeline = make_pipeline(logs, axis, options);
     axis_model.kind = options.model;
+    nlohmann::json selection_json;
+    if (chooses_features(options)) {
+      if (options.selection_progress) options.selection_progress(axis, "choosing feature terms");
+      FeatureSelectionOptions selection_options;
+      selection_options.model = options.model;
+      selection_options.svr = options.svr;
+      if (options.tuning) selection_options.folds = options.tuning->folds;
+      const FeatureSelection selection = select_features(logs, axis, axis_model.pipeline, selection_options);
+      axis_model.pipeline.terms.clear();
+      for (const auto& term : selection.terms) axis_model.pipeline.terms.push_back(FeatureTerm::parse(term));
+      axis_model.pipeline.validate();
+      selection_json = selection.to_json(selection_options);
+    }
     const auto& pipeline = axis_model.pipeline;
 
     const FeatureTable training = feature_table(logs, pipeline, axis, true);
@@ -240,6 +261,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
         fit_model(training.features, training.target, pipeline.term_names(), options, true, axis);
     axis_model.model = std::move(fitted.model);
     nlohmann::json fit = std::move(fitted.fit);
+    if (!selection_json.is_null()) fit["feature_selection"] = std::move(selection_json);
 
     AxisCalibration report;
     const FeatureTable every = feature_table(logs, pipeline, axis, false);
@@ -254,6 +276,28 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     calibration.axes.push_back(report);
   }
   return calibration;
+}
+
+std::vector<ResidualMetrics> evaluate_from(const DriftModel& model, const ChamberLog& log, std::size_t first_row) {
+  if (log.axes() != model.axes.size()) {
+    throw DataError(log.source, 0, 0,
+                    fmt::format("the model has {} axes but {} gyro columns were read", model.axes.size(), log.axes()));
+  }
+  std::vector<ResidualMetrics> metrics;
+  for (std::size_t axis = 0; axis < model.axes.size(); ++axis) {
+    const auto& axis_model = model.axes[axis];
+    const auto channel = temperature_channel_per_axis(log).at(axis);
+    const FeatureTable table = build_feature_table(axis_model.pipeline, log, axis, channel, false);
+    const auto first = static_cast<Eigen::Index>(
+        std::lower_bound(table.row.begin(), table.row.end(), first_row) - table.row.begin());
+    const Eigen::Index count = static_cast<Eigen::Index>(table.rows()) - first;
+    if (count <= 0) {
+      throw DataError(log.source, 0, 0, fmt::format("no usable samples from row {} on", first_row + 1));
+    }
+    metrics.push_back(residual_metrics(table.target.tail(count),
+                                       axis_model.predict(table.features.bottomRows(count))));
+  }
+  return metrics;
 }
 
 std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs) {

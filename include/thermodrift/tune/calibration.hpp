@@ -23,12 +23,17 @@ struct CalibrationOptions {
   double smooth_seconds = 100;             // moving-average window (seed: 100 s)
   std::optional<double> rate_span_seconds; // dT/dt span; default: the smoothing window (at least 1 s)
   std::optional<std::size_t> decimation;   // default: about 10 samples per smoothing window
-  std::vector<std::string> terms{"dT", "rate"};  // feature terms (the seed's pair)
+  std::vector<std::string> terms{"dT", "rate"};  // feature terms (the seed's pair); {"auto"}: chosen per axis
   SvrOptions svr;                          // C, gamma, epsilon, tolerance for --model svr (standardized units)
   std::optional<SvrTuningOptions> tuning;  // tune C, σ (and ε) per axis instead of using `svr`'s
   // Progress of the tuning of axis `axis` (0-based); returning false stops the run.
   std::function<bool(std::size_t axis, const optim::Progress&)> tuning_progress;
+  // A line of progress of axis `axis` outside tuning (feature selection); may be empty.
+  std::function<void(std::size_t axis, const std::string&)> selection_progress;
 };
+
+// True when options.terms is {"auto"}: calibrate chooses terms per axis (tune/feature_selection.hpp).
+bool chooses_features(const CalibrationOptions& options);
 
 // Which temperature channel feeds each axis: one channel for all axes, or one per axis.
 // Throws UsageError otherwise.
@@ -78,5 +83,9 @@ FeatureTable feature_table(const std::vector<ChamberLog>& logs, const Pipeline& 
 
 // Metrics of a fitted model on logs it may not have seen (every ready sample).
 std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs);
+// Metrics on the rows of `log` from `first_row` on, the features streamed from its first
+// row: the held-out part of one continuous log, with filters and lags carried into it
+// as a running compensator carries them (they see temperatures only, never the gyro).
+std::vector<ResidualMetrics> evaluate_from(const DriftModel& model, const ChamberLog& log, std::size_t first_row);
 
 }  // namespace thermodrift
