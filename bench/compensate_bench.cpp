@@ -35,18 +35,6 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-ChamberLog as_log(const sim::ChamberRun& run) {
-  ChamberLog log;
-  log.time = run.column("time_s");
-  for (const char* axis : {"x", "y", "z"}) {
-    log.gyro_names.push_back(std::string("gyro_") + axis);
-    log.gyro.push_back(run.column(std::string("gyro_") + axis));
-    log.temperature_names.push_back(std::string("temp_") + axis);
-    log.temperature.push_back(run.column(std::string("temp_") + axis));
-  }
-  return log;
-}
-
 // One model per axis on a 1 Hz cycle: the seed's pipeline, linear or ε-SVR with fixed
 // C = 10, γ = 0.5, ε = 0.05 (standardized units), as the export test fits them.
 DriftModel fit(const ChamberLog& log, const std::string& kind) {
@@ -144,7 +132,7 @@ int main(int argc, char** argv) {
   sim::SimulatorOptions training;
   training.cycles = 1;
   training.rate_hz = 1.0;
-  const ChamberLog training_log = as_log(sim::simulate(training));
+  const ChamberLog training_log = sim::to_chamber_log(sim::simulate(training));
   const DriftModel svr_model = fit(training_log, "svr");
   const DriftModel linear_model = fit(training_log, "linear");
   const auto& axis = svr_model.axes.front();

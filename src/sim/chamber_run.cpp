@@ -35,7 +35,7 @@ std::vector<std::size_t> ChamberRun::cycle_start_rows() const {
   return starts;
 }
 
-std::array<double, 3> ChamberRun::noise_floor(double window_s) const {
+std::array<double, 3> ChamberRun::noise_floor(double window_s, std::size_t first_row) const {
   const std::size_t window = window_samples(window_s, rate_hz);
   static constexpr std::array<std::string_view, 3> gyro_names = {"gyro_x", "gyro_y", "gyro_z"};
   static constexpr std::array<std::string_view, 3> drift_names = {"drift_x", "drift_y", "drift_z"};
@@ -44,6 +44,7 @@ std::array<double, 3> ChamberRun::noise_floor(double window_s) const {
     const std::vector<double>& gyro = column(gyro_names[axis]);
     const std::vector<double>& drift = column(drift_names[axis]);
     if (gyro.size() < window) throw UsageError("smoothing window is longer than the run");
+    if (first_row + 1 >= gyro.size()) throw UsageError("the noise floor needs at least two rows from its first row on");
     // Trailing mean over the last `window` noise samples, kept as a running sum.
     std::vector<double> smoothed;
     smoothed.reserve(gyro.size() - window + 1);
@@ -51,7 +52,7 @@ std::array<double, 3> ChamberRun::noise_floor(double window_s) const {
     for (std::size_t k = 0; k < gyro.size(); ++k) {
       sum += gyro[k] - drift[k];
       if (k >= window) sum -= gyro[k - window] - drift[k - window];
-      if (k + 1 >= window) smoothed.push_back(sum / static_cast<double>(window));
+      if (k + 1 >= window && k >= first_row) smoothed.push_back(sum / static_cast<double>(window));
     }
     double mean = 0.0;
     for (double value : smoothed) mean += value;
@@ -61,6 +62,21 @@ std::array<double, 3> ChamberRun::noise_floor(double window_s) const {
     floor[axis] = variance / static_cast<double>(smoothed.size());
   }
   return floor;
+}
+
+ChamberLog to_chamber_log(const ChamberRun& run) {
+  ChamberLog log;
+  log.source = "simulated";
+  log.time = run.column("time_s");
+  for (const char* axis : {"x", "y", "z"}) {
+    log.gyro_names.push_back(std::string("gyro_") + axis);
+    log.gyro.push_back(run.column(std::string("gyro_") + axis));
+    log.temperature_names.push_back(std::string("temp_") + axis);
+    log.temperature.push_back(run.column(std::string("temp_") + axis));
+  }
+  log.line.resize(log.rows());
+  for (std::size_t i = 0; i < log.rows(); ++i) log.line[i] = i + 2;  // as write_csv writes it: a header, then rows
+  return log;
 }
 
 double expected_noise_floor(const NoiseOptions& noise, double rate_hz, double window_s) {

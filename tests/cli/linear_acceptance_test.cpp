@@ -21,18 +21,7 @@ ChamberLog simulated_cycle() {
   sim::SimulatorOptions options;
   options.cycles = 1;
   options.seed = 3;
-  const sim::ChamberRun run = sim::simulate(options);
-  ChamberLog log;
-  log.source = "simulated";
-  log.time = run.column("time_s");
-  for (const char* axis : {"x", "y", "z"}) {
-    log.gyro_names.push_back(std::string("gyro_") + axis);
-    log.gyro.push_back(run.column(std::string("gyro_") + axis));
-    log.temperature_names.push_back(std::string("temp_") + axis);
-    log.temperature.push_back(run.column(std::string("temp_") + axis));
-  }
-  for (std::size_t i = 0; i < log.rows(); ++i) log.line.push_back(i + 2);
-  return log;
+  return sim::to_chamber_log(sim::simulate(options));
 }
 
 LogSpec simulated_spec() {

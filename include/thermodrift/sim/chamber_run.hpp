@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/sim/options.hpp"
 
 namespace thermodrift::sim {
@@ -40,9 +41,14 @@ struct ChamberRun {
   // moving average over `window_s` seconds: what no drift model can remove from data
   // smoothed that way. Computed empirically from this run's noise series, over the rows
   // where the window is full, around the series' mean (a model's intercept absorbs a
-  // constant). A window shorter than one sample means no smoothing.
-  std::array<double, 3> noise_floor(double window_s) const;
+  // constant). A window shorter than one sample means no smoothing. From `first_row` on
+  // only: the floor of a held-out part (the smoothing still sees the rows before it).
+  std::array<double, 3> noise_floor(double window_s, std::size_t first_row = 0) const;
 };
+
+// The run as the log thermodrift reads (time_s; gyro_x/y/z in °/h; temp_x/y/z, one per
+// axis), without writing it out: line numbers as write_csv would give them.
+ChamberLog to_chamber_log(const ChamberRun& run);
 
 // The same quantity predicted from the noise model alone: white noise σ²/w, plus the
 // Gauss-Markov bias variance reduced by the window, plus the quantization error, which

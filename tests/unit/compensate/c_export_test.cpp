@@ -28,17 +28,7 @@ ChamberLog simulated_log() {
   sim::SimulatorOptions options;
   options.cycles = 1;
   options.rate_hz = 1.0;
-  const sim::ChamberRun run = sim::simulate(options);
-  ChamberLog log;
-  log.source = "simulated";
-  log.time = run.column("time_s");
-  for (const char* axis : {"x", "y", "z"}) {
-    log.gyro_names.push_back(std::string("gyro_") + axis);
-    log.gyro.push_back(run.column(std::string("gyro_") + axis));
-    log.temperature_names.push_back(std::string("temp_") + axis);
-    log.temperature.push_back(run.column(std::string("temp_") + axis));
-  }
-  return log;
+  return sim::to_chamber_log(sim::simulate(options));
 }
 
 // The log without rows [begin, end): a gap in time the pipeline must restart after.

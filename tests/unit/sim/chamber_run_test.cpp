@@ -76,6 +76,30 @@ TEST(NoiseFloor, MatchesTheNoiseModelAndFallsWithTheWindow) {
   EXPECT_NEAR(expected_noise_floor(noise, 1.0, 100.0), 4.3e-4, 0.2e-4);
 }
 
+// From a first row on, unsmoothed: the plain variance of that part's noise; and the
+// log view of the run holds the same samples.
+TEST(NoiseFloor, FromAFirstRowIsThatPartsVariance) {
+  SimulatorOptions options;
+  options.cycles = 1;
+  const ChamberRun run = simulate(options);
+  const std::size_t first = run.rows() / 2;
+  const auto& gyro = run.column("gyro_y");
+  const auto& drift = run.column("drift_y");
+  double sum = 0, squares = 0;
+  for (std::size_t r = first; r < run.rows(); ++r) sum += gyro[r] - drift[r];
+  const double mean = sum / static_cast<double>(run.rows() - first);
+  for (std::size_t r = first; r < run.rows(); ++r) squares += std::pow(gyro[r] - drift[r] - mean, 2);
+  EXPECT_NEAR(run.noise_floor(0.0, first)[1], squares / static_cast<double>(run.rows() - first), 1e-12);
+  EXPECT_NE(run.noise_floor(0.0, first)[1], run.noise_floor(0.0)[1]);
+  EXPECT_THROW(run.noise_floor(100.0, run.rows() - 1), UsageError);
+
+  const ChamberLog log = to_chamber_log(run);
+  ASSERT_EQ(log.rows(), run.rows());
+  EXPECT_EQ(log.gyro.at(1), gyro);
+  EXPECT_EQ(log.temperature.at(2), run.column("temp_z"));
+  EXPECT_EQ(log.line.back(), run.rows() + 1);
+}
+
 TEST(NoiseFloor, WhiteOnlyFloorIsVarianceOverWindow) {
   NoiseOptions white_only;
   white_only.bias_instability_dph = 0.0;
