@@ -305,17 +305,24 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   }
   summary["tables"] = tables;
 
-  // How each model chose its terms, axis by axis (--features auto).
+  // How the terms were chosen, axis by axis (--features auto): the models share one
+  // least-squares search, whose path the SVR's record extends with the sets it judged.
   nlohmann::json selections = nlohmann::json::array();
-  for (const auto& m : study.models) {
-    for (std::size_t a = 0; a < axes; ++a) {
+  for (std::size_t a = 0; a < axes; ++a) {
+    nlohmann::json entry = {{"axis", log.gyro_names[a]}, {"chosen", nlohmann::json::array()}};
+    for (const auto& m : study.models) {
       const auto& fit = m.calibration.model.axes[a].fit;
       if (!fit.contains("feature_selection")) continue;
-      selections.push_back({{"model", m.model},
-                            {"label", model_label(m, a)},
-                            {"axis", log.gyro_names[a]},
-                            {"selection", fit["feature_selection"]}});
+      const auto& selection = fit["feature_selection"];
+      if (!entry.contains("selection") || selection["path"].size() > entry["selection"]["path"].size()) {
+        entry["selection"] = selection;
+      }
+      entry["chosen"].push_back({{"label", model_kind_label(m, a)},
+                                 {"terms", selection["terms"]},
+                                 {"scored_by", selection["scored_by"]},
+                                 {"cv_mse", selection["cv_mse"]}});
     }
+    if (entry.contains("selection")) selections.push_back(std::move(entry));
   }
   summary["feature_selection"] = selections;
 

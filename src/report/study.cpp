@@ -48,6 +48,13 @@ Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& 
     feature_sets.push_back(options.other_terms);
   }
   for (const auto& terms : feature_sets) {
+    CalibrationOptions shared = options.calibration;
+    shared.terms = terms;
+    if (chooses_features(shared) && options.models.size() > 1) {
+      // One least-squares search per axis serves every model (an SVR then judges its sets).
+      if (options.progress) options.progress("choosing feature terms per axis (least squares, blocked CV)");
+      shared.selections = select_features_per_axis(training, shared);
+    }
     for (const auto& name : options.models) {
       const std::string features = fmt::format("{}", fmt::join(terms, ","));
       if (options.progress) {
@@ -57,9 +64,8 @@ Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& 
       ModelStudy entry;
       entry.model = name;
       entry.features = features;
-      CalibrationOptions calibration_options = options.calibration;
+      CalibrationOptions calibration_options = shared;
       calibration_options.model = name;
-      calibration_options.terms = terms;
       entry.calibration = calibrate(training, spec, calibration_options);
       for (const auto& axis : entry.calibration.axes) entry.in_sample.push_back(axis.in_sample);
       entry.held_out = evaluate_from(entry.calibration.model, log, study.split_row);

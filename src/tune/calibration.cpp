@@ -9,7 +9,6 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/svr_model.hpp"
-#include "thermodrift/tune/feature_selection.hpp"
 
 namespace thermodrift {
 
@@ -86,6 +85,17 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
 }
 
 }  // namespace
+
+std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
+                                                       const CalibrationOptions& options) {
+  if (logs.empty()) throw UsageError("no log to choose features on");
+  std::vector<FeatureSelection> selections;
+  for (std::size_t axis = 0; axis < logs.front().axes(); ++axis) {
+    if (options.selection_progress) options.selection_progress(axis, "choosing feature terms");
+    selections.push_back(select_features(logs, axis, make_pipeline(logs, axis, options), FeatureSelectionOptions{}));
+  }
+  return selections;
+}
 
 bool chooses_features(const CalibrationOptions& options) {
   return options.terms.size() == 1 && options.terms.front() == "auto";
@@ -242,12 +252,20 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     axis_model.kind = options.model;
     nlohmann::json selection_json;
     if (chooses_features(options)) {
-      if (options.selection_progress) options.selection_progress(axis, "choosing feature terms");
-      FeatureSelectionOptions selection_options;
-      selection_options.model = options.model;
-      selection_options.svr = options.svr;
-      if (options.tuning) selection_options.folds = options.tuning->folds;
-      const FeatureSelection selection = select_features(logs, axis, axis_model.pipeline, selection_options);
+      const FeatureSelectionOptions selection_options;  // its own folds, not the tuning's
+      const bool searched = axis < options.selections.size();
+      if (!searched && options.selection_progress) options.selection_progress(axis, "choosing feature terms");
+      FeatureSelection selection = searched ? options.selections[axis]
+                                            : select_features(logs, axis, axis_model.pipeline, selection_options);
+      if (options.model == "svr") {
+        if (options.selection_progress) options.selection_progress(axis, "judging the chosen terms by SVR");
+        SvrJudgeOptions judge;
+        judge.tuning = options.tuning;
+        judge.fixed = options.svr;
+        if (options.tuning) judge.folds = options.tuning->folds;
+        judge.min_gain = selection_options.min_gain;
+        judge_by_svr(selection, logs, axis, axis_model.pipeline, judge);
+      }
       axis_model.pipeline.terms.clear();
       for (const auto& term : selection.terms) axis_model.pipeline.terms.push_back(FeatureTerm::parse(term));
       axis_model.pipeline.validate();

@@ -12,16 +12,17 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/models/svr_model.hpp"
 #include "thermodrift/tune/calibration.hpp"
-#include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
 
 namespace {
 
+using Terms = std::vector<std::string>;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // The ready, decimated samples of every term asked for so far, one column per term name:
-// each new batch of terms is one streaming pass over the logs.
+// each new batch of terms is one streaming pass over the logs. The time-constant search
+// asks for many columns, so past a byte budget the cache starts afresh.
 class ColumnCache {
  public:
   ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline)
@@ -29,24 +30,29 @@ class ColumnCache {
     pipeline_.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
     const FeatureTable table = feature_table(logs, pipeline_, axis, true);
     target_ = table.target;
-    columns_["dT"] = table.features.col(0);
   }
 
   const Eigen::VectorXd& target() const { return target_; }
 
-  void ensure(const std::vector<std::string>& names) {
+  void ensure(const Terms& names) {
     pipeline_.terms.clear();
     for (const auto& name : names) {
       if (!columns_.count(name)) pipeline_.terms.push_back(FeatureTerm::parse(name));
     }
     if (pipeline_.terms.empty()) return;
+    const std::size_t column_bytes = static_cast<std::size_t>(target_.size()) * sizeof(double);
+    if ((columns_.size() + pipeline_.terms.size()) * column_bytes > kBudgetBytes) {
+      std::erase_if(columns_, [&](const auto& entry) {
+        return std::find(names.begin(), names.end(), entry.first) == names.end();
+      });
+    }
     const FeatureTable table = feature_table(*logs_, pipeline_, axis_, true);
     for (std::size_t j = 0; j < pipeline_.terms.size(); ++j) {
       columns_[pipeline_.terms[j].name()] = table.features.col(static_cast<Eigen::Index>(j));
     }
   }
 
-  Eigen::MatrixXd matrix(const std::vector<std::string>& names) {
+  Eigen::MatrixXd matrix(const Terms& names) {
     ensure(names);
     Eigen::MatrixXd x(target_.size(), static_cast<Eigen::Index>(names.size()));
     for (std::size_t j = 0; j < names.size(); ++j) x.col(static_cast<Eigen::Index>(j)) = columns_.at(names[j]);
@@ -54,6 +60,7 @@ class ColumnCache {
   }
 
  private:
+  static constexpr std::size_t kBudgetBytes = std::size_t{256} << 20;
   const std::vector<ChamberLog>* logs_;
   std::size_t axis_;
   Pipeline pipeline_;
@@ -89,19 +96,6 @@ double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int 
   return squared_error / static_cast<double>(n);
 }
 
-// Blocked CV MSE of an SVR at fixed options, in (°/h)², features and target standardized
-// on the whole table (as the final fit does).
-double svr_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const FeatureSelectionOptions& options) {
-  const Standardization scaling = Standardization::of(x, y);
-  SvrTuningOptions tuning;
-  tuning.objective = TuneObjective::cv;
-  tuning.folds = options.folds;
-  tuning.solver = options.svr;
-  const SvrObjective objective(scaling.features(x), scaling.target(y), tuning);
-  const double sigma = std::sqrt(1.0 / (2.0 * options.svr.gamma));
-  return objective(options.svr.C, sigma, options.svr.epsilon) * scaling.target_scale * scaling.target_scale;
-}
-
 // The time constants of a term's atoms.
 std::vector<double> time_constants(const FeatureTerm& term) {
   std::vector<double> out;
@@ -126,9 +120,12 @@ std::vector<std::string> with_time_constant(const std::vector<std::string>& term
   return out;
 }
 
-// Terms worth offering once `chosen` holds a lag of TAU: the gradient's rate behind the
-// coil's (gradrate:TAU:TG) and a heating/cooling memory of the coil's rate (dir:TD:TAU).
-std::vector<std::string> conditional_candidates(const std::vector<std::string>& chosen) {
+// Candidates offered once `chosen` holds a lag of TAU: the gradient's rate behind the
+// coil's (gradrate:TAU:TG), a heating/cooling memory of the coil's rate (dir:TD:TAU) and
+// lag*lagrate; each alone, and two of different kinds together. Pairs matter: a Shupe term
+// and a hysteresis term often pay only together, and alone each is beaten by moving the
+// lag itself, which the greedy search then cannot undo.
+std::vector<Terms> conditional_candidates(const Terms& chosen) {
   std::set<double> lags;
   for (const auto& name : chosen) {
     const FeatureTerm term = FeatureTerm::parse(name);
@@ -138,13 +135,22 @@ std::vector<std::string> conditional_candidates(const std::vector<std::string>& 
       }
     }
   }
-  std::vector<std::string> out;
+  std::vector<Terms> out;
   for (const double tau : lags) {
+    std::vector<Terms> kinds(3);
     for (const double tg : time_constant_grid()) {
-      if (tg <= 1920) out.push_back(fmt::format("gradrate:{}:{}", tau, tg));
+      if (tg <= 1920) kinds[0].push_back(fmt::format("gradrate:{}:{}", tau, tg));
     }
-    for (const double td : {300.0, 900.0, 2700.0}) out.push_back(fmt::format("dir:{}:{}", td, tau));
-    out.push_back(fmt::format("lag:{}*lagrate:{}", tau, tau));
+    for (const double td : {300.0, 900.0, 2700.0}) kinds[1].push_back(fmt::format("dir:{}:{}", td, tau));
+    kinds[2].push_back(fmt::format("lag:{}*lagrate:{}", tau, tau));
+    for (std::size_t k = 0; k < kinds.size(); ++k) {
+      for (const auto& term : kinds[k]) {
+        out.push_back({term});
+        for (std::size_t other = k + 1; other < kinds.size(); ++other) {
+          for (const auto& second : kinds[other]) out.push_back({term, second});
+        }
+      }
+    }
   }
   return out;
 }
@@ -172,7 +178,7 @@ nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options)
   for (const auto& step : path) {
     steps.push_back({{"action", step.action}, {"term", step.term}, {"cv_mse", step.cv_mse}, {"terms", step.terms}});
   }
-  return {{"scored_by", options.model == "svr" ? "svr" : "least_squares"},
+  return {{"scored_by", scored_by},
           {"folds", options.folds},
           {"min_gain", options.min_gain},
           {"start_mse", start_mse},
@@ -182,6 +188,112 @@ nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options)
           {"path", steps}};
 }
 
+namespace {
+
+// The search state of one axis. The score of a set S of k terms is its blocked CV MSE,
+// penalized: J(S) = CV(S) / (1 - min_gain)^k, so a term must cut the CV MSE by more than
+// min_gain to pay. Every accepted step (add, drop, a time constant moved) lowers J, so the
+// search cannot cycle.
+class Search {
+ public:
+  struct Scored {
+    Terms terms;
+    double cv = kInfinity;
+    std::map<double, double> origin;  // time constant now -> where it was before refining
+  };
+
+  Search(ColumnCache& cache, const FeatureSelectionOptions& options, FeatureSelection& result)
+      : cache_(cache), options_(options), result_(result), keep_(1.0 - options.min_gain) {
+    const auto grid = time_constant_grid();
+    min_tau_ = grid.front() / 4;
+    max_tau_ = grid.back() * 4;
+  }
+
+  double cv(const Terms& terms) {
+    ++result_.candidates_scored;
+    return least_squares_cv(cache_.matrix(terms), cache_.target(), options_.folds);
+  }
+  double penalized(const Scored& s) const { return s.cv / std::pow(keep_, static_cast<double>(s.terms.size())); }
+
+  // Coordinate pattern search over the distinct time constants of `start` in log scale:
+  // each moves by 2^(±step) while that lowers the CV MSE, step 1/2, 1/4, 1/8, 1/16. One
+  // constant shared by several terms moves as one (one physical lag). At most `budget`
+  // sets are scored.
+  Scored refine(Scored best, long budget) {
+    long used = 0;
+    for (const double step : {0.5, 0.25, 0.125, 0.0625}) {
+      for (bool pass_improved = true; pass_improved && used < budget;) {
+        pass_improved = false;
+        for (double tau : constants(best.terms)) {
+          for (bool improved = true; improved && used < budget;) {
+            improved = false;
+            for (const double factor : {std::pow(2.0, step), std::pow(2.0, -step)}) {
+              const double moved = std::round(tau * factor);
+              if (moved == tau || moved < min_tau_ || moved > max_tau_ || constants(best.terms).count(moved)) continue;
+              Terms trial = with_time_constant(best.terms, tau, moved);
+              ++used;
+              const double value = cv(trial);
+              if (value < best.cv) {
+                const auto from = best.origin.find(tau);
+                best.origin[moved] = from == best.origin.end() ? tau : from->second;
+                if (from != best.origin.end()) best.origin.erase(tau);
+                best.terms = std::move(trial);
+                best.cv = value;
+                tau = moved;
+                improved = pass_improved = true;
+                break;
+              }
+              if (used >= budget) break;
+            }
+          }
+        }
+      }
+    }
+    return best;
+  }
+
+  static std::set<double> constants(const Terms& terms) {
+    std::set<double> out;
+    for (const auto& name : terms) {
+      for (const double tau : time_constants(FeatureTerm::parse(name))) out.insert(tau);
+    }
+    return out;
+  }
+
+  // "a -> b, c -> d": the constants `refine` moved, from where they were to where they are.
+  static std::string moves(const Scored& s) {
+    std::string out;
+    for (const auto& [now, before] : s.origin) {
+      if (now != before) out += fmt::format("{}{} -> {}", out.empty() ? "" : ", ", before, now);
+    }
+    return out;
+  }
+
+ private:
+  ColumnCache& cache_;
+  const FeatureSelectionOptions& options_;
+  FeatureSelection& result_;
+  double keep_;
+  double min_tau_ = 0, max_tau_ = 0;
+};
+
+// Terms followed by those of `block` they do not hold yet, in order.
+Terms with_block(const Terms& terms, const Terms& block) {
+  Terms out = terms;
+  for (const auto& term : block) {
+    if (std::find(out.begin(), out.end(), term) == out.end()) out.push_back(term);
+  }
+  return out;
+}
+
+std::string joined(const Terms& terms, std::size_t from) {
+  std::string out;
+  for (std::size_t i = from; i < terms.size(); ++i) out += (out.empty() ? "" : ",") + terms[i];
+  return out;
+}
+
+}  // namespace
+
 FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
                                  const FeatureSelectionOptions& options) {
   ColumnCache cache(logs, axis, pipeline);
@@ -190,132 +302,142 @@ FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_
     throw UsageError(fmt::format("--features auto: {} samples are too few for {}-fold selection", y.size(),
                                  options.folds));
   }
-  const bool by_svr = options.model == "svr";
   FeatureSelection result;
-  auto least_squares = [&](const std::vector<std::string>& terms) {
-    ++result.candidates_scored;
-    return least_squares_cv(cache.matrix(terms), y, options.folds);
-  };
-  auto score = [&](const std::vector<std::string>& terms) {
-    if (!by_svr) return least_squares(terms);
-    ++result.candidates_scored;
-    return svr_cv(cache.matrix(terms), y, options);
-  };
-  std::vector<std::string> chosen;
-  double current = least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, options.folds);
-  result.start_mse = current;
+  Search search(cache, options, result);
+  using Scored = Search::Scored;
+  Scored current{{}, search.cv({}), {}};
+  result.start_mse = current.cv;
+
   // A candidate is one term or a block of terms sharing one lag (the coil's temperature
-  // and its rate enter together); a block of k terms must pay k penalties.
-  std::vector<std::vector<std::string>> candidates;
+  // and its rate enter together).
+  std::vector<Terms> candidates;
   for (const auto& term : base_candidate_terms()) candidates.push_back({term});
   for (const double tau : time_constant_grid()) {
     candidates.push_back({fmt::format("lag:{}", tau), fmt::format("lagrate:{}", tau)});
     candidates.push_back({fmt::format("lag:{}", tau), fmt::format("lagrate:{}", tau), fmt::format("lag:{}^2", tau)});
   }
-  for (const auto& block : candidates) cache.ensure(block);
-  const double keep = 1.0 - options.min_gain;
-  auto is_chosen = [&](const std::string& term) { return std::find(chosen.begin(), chosen.end(), term) != chosen.end(); };
-  auto with_block = [&](const std::vector<std::string>& block) {
-    std::vector<std::string> terms = chosen;
-    for (const auto& term : block) {
-      if (std::find(terms.begin(), terms.end(), term) == terms.end()) terms.push_back(term);
+
+  const std::size_t base_candidates = candidates.size();
+
+  // Drops while one lowers the penalized score (a proxy taken early that later terms made
+  // redundant); each unrefined, the set refined after the last.
+  auto drop_while_it_pays = [&] {
+    bool dropped = false;
+    while (current.terms.size() > 1) {
+      Scored best;
+      std::string term;
+      for (std::size_t i = 0; i < current.terms.size(); ++i) {
+        Scored trial{current.terms, 0, {}};
+        trial.terms.erase(trial.terms.begin() + static_cast<std::ptrdiff_t>(i));
+        trial.cv = search.cv(trial.terms);
+        if (trial.cv < best.cv) best = std::move(trial), term = current.terms[i];
+      }
+      if (!(search.penalized(best) < search.penalized(current))) break;
+      current = std::move(best);
+      result.path.push_back({"drop", term, current.cv, current.terms});
+      dropped = true;
     }
-    return terms;
+    return dropped;
+  };
+  auto refine_and_record = [&](long budget) {
+    Scored refined = search.refine({current.terms, current.cv, {}}, budget);
+    if (refined.cv < current.cv) {
+      result.path.push_back({"tune", Search::moves(refined), refined.cv, refined.terms});
+      current = std::move(refined);
+    }
   };
 
-  // Forward steps: the candidate whose penalized score (CV MSE / keep^k for k new terms)
-  // is lowest, while it beats the current score.
-  while (chosen.size() < options.max_terms) {
+  // Forward steps: every candidate is scored as it stands; the best few are refined
+  // (their time constants and those already chosen move together, since a new term often
+  // wants the lag it shares to move), and the best refined one is taken if it pays.
+  for (std::size_t step = 0; step < 4 * options.max_terms; ++step) {
     std::vector<std::pair<double, std::size_t>> ranked;
     for (std::size_t c = 0; c < candidates.size(); ++c) {
-      const auto terms = with_block(candidates[c]);
-      const std::size_t added = terms.size() - chosen.size();
-      if (added == 0 || terms.size() > options.max_terms) continue;
-      ranked.emplace_back(least_squares(terms) / std::pow(keep, static_cast<double>(added)), c);
+      Scored trial{with_block(current.terms, candidates[c]), 0, {}};
+      if (trial.terms.size() == current.terms.size() || trial.terms.size() > options.max_terms) continue;
+      trial.cv = search.cv(trial.terms);
+      ranked.emplace_back(search.penalized(trial), c);
     }
     if (ranked.empty()) break;
     std::stable_sort(ranked.begin(), ranked.end());
-    double best = kInfinity, best_penalized = kInfinity;
-    std::size_t best_candidate = ranked.front().second;
-    const std::size_t scored = by_svr ? std::min(ranked.size(), std::max<std::size_t>(options.shortlist, 1)) : 1;
-    for (std::size_t i = 0; i < scored; ++i) {
-      const auto terms = with_block(candidates[ranked[i].second]);
-      const double value = by_svr ? score(terms) : ranked[i].first * std::pow(keep, double(terms.size() - chosen.size()));
-      const double penalized = value / std::pow(keep, static_cast<double>(terms.size() - chosen.size()));
-      if (penalized < best_penalized) best = value, best_penalized = penalized, best_candidate = ranked[i].second;
+    Scored best;
+    const std::size_t refined = std::min(ranked.size(), std::max<std::size_t>(options.refine_top, 1));
+    for (std::size_t i = 0; i < refined; ++i) {
+      Scored trial{with_block(current.terms, candidates[ranked[i].second]), 0, {}};
+      trial.cv = search.cv(trial.terms);
+      trial = search.refine(std::move(trial), options.refine_budget);
+      if (search.penalized(trial) < search.penalized(best)) best = std::move(trial);
     }
-    if (!(best_penalized < current)) break;
-    const auto& block = candidates[best_candidate];
-    std::string added;
-    for (const auto& term : block) {
-      if (!is_chosen(term)) added += (added.empty() ? "" : ",") + term;
-    }
-    chosen = with_block(block);
-    current = best;
-    result.path.push_back({"add", added, current, chosen});
-    for (const auto& term : conditional_candidates(chosen)) {
-      const std::vector<std::string> single{term};
-      if (std::find(candidates.begin(), candidates.end(), single) == candidates.end()) candidates.push_back(single);
-    }
+    if (!(search.penalized(best) < search.penalized(current))) break;
+    const std::string moved = Search::moves(best);
+    const std::size_t before = current.terms.size();
+    current = {best.terms, best.cv, {}};
+    result.path.push_back({"add", joined(current.terms, before) + (moved.empty() ? "" : " (" + moved + ")"),
+                           current.cv, current.terms});
+    if (drop_while_it_pays()) refine_and_record(options.refine_budget);
+    // Terms on the lags chosen now (not on where they stood before refining).
+    candidates.resize(base_candidates);
+    for (auto& block : conditional_candidates(current.terms)) candidates.push_back(std::move(block));
   }
-  if (by_svr && !chosen.empty()) current = score(chosen);
+  refine_and_record(4 * options.refine_budget);
+  if (drop_while_it_pays()) refine_and_record(4 * options.refine_budget);
 
-  // Each distinct time constant moves (all its uses together: one physical lag) by
-  // factors 2^(±1/4), then 2^(±1/8), 2^(±1/16), while that pays.
-  auto tune_time_constants = [&] {
-    for (const double step : {0.25, 0.125, 0.0625}) {
-      std::set<double> constants;
-      for (const auto& name : chosen) {
-        for (double tau : time_constants(FeatureTerm::parse(name))) constants.insert(tau);
-      }
-      for (double tau : constants) {
-        for (bool improved = true; improved;) {
-          improved = false;
-          for (const double factor : {std::pow(2.0, step), std::pow(2.0, -step)}) {
-            const double moved = std::round(tau * factor);
-            if (moved == tau || moved < 1 || constants.count(moved)) continue;
-            const auto trial = with_time_constant(chosen, tau, moved);
-            const double value = score(trial);
-            if (value < current) {
-              result.path.push_back({"tune", fmt::format("{} -> {}", tau, moved), value, trial});
-              chosen = trial;
-              current = value;
-              tau = moved;
-              improved = true;
-              break;
-            }
-          }
-        }
-      }
-    }
-  };
-  tune_time_constants();
-
-  // Backward steps: a term whose removal costs less than its penalty goes (a proxy taken
-  // early that later terms made redundant).
-  for (bool removed = true; removed && chosen.size() > 1;) {
-    removed = false;
-    double best = kInfinity;
-    std::size_t best_index = 0;
-    for (std::size_t i = 0; i < chosen.size(); ++i) {
-      std::vector<std::string> trial = chosen;
-      trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(i));
-      const double value = score(trial);
-      if (value < best) best = value, best_index = i;
-    }
-    if (best * keep < current) {
-      const std::string term = chosen[best_index];
-      chosen.erase(chosen.begin() + static_cast<std::ptrdiff_t>(best_index));
-      current = best;
-      result.path.push_back({"drop", term, current, chosen});
-      removed = true;
-    }
-  }
-  if (!result.path.empty() && result.path.back().action == "drop") tune_time_constants();
-  if (chosen.empty()) chosen = {"dT", "rate"};  // nothing pays: the seed's pair
-  result.terms = chosen;
-  result.cv_mse = current;
+  if (current.terms.empty()) current.terms = {"dT", "rate"};  // nothing pays: the seed's pair
+  result.terms = current.terms;
+  result.cv_mse = current.cv;
   return result;
+}
+
+void judge_by_svr(FeatureSelection& selection, const std::vector<ChamberLog>& logs, std::size_t axis,
+                  const Pipeline& pipeline, const SvrJudgeOptions& options) {
+  // The sets the search settled on: the one standing before each addition, and the last.
+  std::vector<Terms> sets;
+  const auto& path = selection.path;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const bool settled = i + 1 == path.size() || path[i + 1].action == "add";
+    if (settled && path[i].action != "svr" &&
+        std::find(sets.begin(), sets.end(), path[i].terms) == sets.end()) {
+      sets.push_back(path[i].terms);
+    }
+  }
+  if (sets.empty()) sets.push_back(selection.terms);
+  if (sets.size() > options.sets) sets.erase(sets.begin(), sets.end() - static_cast<std::ptrdiff_t>(options.sets));
+
+  std::optional<SvrTuningOptions> tuning = options.tuning;
+  if (tuning) {
+    tuning->evaluations = options.evaluations;
+    tuning->progress = nullptr;
+  }
+  const double keep = 1.0 - options.min_gain;
+  double best_penalized = kInfinity;
+  Pipeline trial = pipeline;
+  for (const auto& terms : sets) {
+    trial.terms.clear();
+    for (const auto& name : terms) trial.terms.push_back(FeatureTerm::parse(name));
+    const FeatureTable table = feature_table(logs, trial, axis, true);
+    const Standardization scaling = Standardization::of(table.features, table.target);
+    const Eigen::MatrixXd x = scaling.features(table.features);
+    const Eigen::VectorXd y = scaling.target(table.target);
+    double scaled_mse = 0;
+    if (tuning) {
+      scaled_mse = tune_svr(x, y, *tuning).objective_value;
+    } else {
+      SvrTuningOptions cv;
+      cv.folds = options.folds;
+      cv.solver = options.fixed;
+      const SvrObjective objective(x, y, cv);
+      scaled_mse = objective(options.fixed.C, std::sqrt(0.5 / options.fixed.gamma), options.fixed.epsilon);
+    }
+    const double mse = scaled_mse * scaling.target_scale * scaling.target_scale;
+    selection.path.push_back({"svr", joined(terms, 0), mse, terms});
+    const double penalized = mse / std::pow(keep, static_cast<double>(terms.size()));
+    if (penalized < best_penalized) {
+      best_penalized = penalized;
+      selection.terms = terms;
+      selection.cv_mse = mse;
+    }
+  }
+  selection.scored_by = "least_squares+svr";
 }
 
 }  // namespace thermodrift

@@ -14,6 +14,7 @@
 #include "thermodrift/models/metrics.hpp"
 #include "thermodrift/models/model_file.hpp"
 #include "thermodrift/models/svr.hpp"
+#include "thermodrift/tune/feature_selection.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
@@ -28,12 +29,20 @@ struct CalibrationOptions {
   std::optional<SvrTuningOptions> tuning;  // tune C, σ (and ε) per axis instead of using `svr`'s
   // Progress of the tuning of axis `axis` (0-based); returning false stops the run.
   std::function<bool(std::size_t axis, const optim::Progress&)> tuning_progress;
+  // With terms {"auto"}: the least-squares selections per axis when already made (a study
+  // fitting several models shares one search); empty: calibrate searches.
+  std::vector<FeatureSelection> selections;
   // A line of progress of axis `axis` outside tuning (feature selection); may be empty.
   std::function<void(std::size_t axis, const std::string&)> selection_progress;
 };
 
 // True when options.terms is {"auto"}: calibrate chooses terms per axis (tune/feature_selection.hpp).
 bool chooses_features(const CalibrationOptions& options);
+
+// The least-squares selection of every axis of `logs` (terms {"auto"}), with the
+// pipeline calibrate would build; the study shares it among the models it fits.
+std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
+                                                       const CalibrationOptions& options);
 
 // Which temperature channel feeds each axis: one channel for all axes, or one per axis.
 // Throws UsageError otherwise.

@@ -1,44 +1,63 @@
-// Choosing feature terms (`--features auto`): greedy forward selection over the thermal
-// terms of features/terms.hpp, scored by blocked cross-validation in time, then a search
-// of each chosen time constant. docs/features.md explains the candidates and the penalty.
+// Choosing feature terms (`--features auto`): forward selection over the thermal terms of
+// features/terms.hpp, scored by blocked cross-validation in time, with the time constants
+// of each candidate refined as it is tried; then, for an SVR, the last sets the search
+// settled on are judged by a tuned SVR's own blocked CV. docs/features.md explains the
+// candidates, the penalty and why the time constants are refined inside the search.
 //
-//   FeatureSelectionOptions options;                  // scored by least squares
-//   FeatureSelection chosen = select_features(logs, axis, pipeline, options);
+//   FeatureSelection chosen = select_features(logs, axis, pipeline, {});  // least squares
+//   judge_by_svr(chosen, logs, axis, pipeline, svr_options);              // --model svr only
 //   pipeline.terms = parse(chosen.terms);              // chosen.path: how it got there
 #pragma once
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
-#include "thermodrift/models/svr.hpp"
+#include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
 
 struct FeatureSelectionOptions {
-  // "linear" or "stepwise": each candidate set is scored by a least-squares fit (terms as
-  // given). "svr": the best `shortlist` candidates by least squares are scored by an SVR
-  // at the fixed `svr` options (standardized units), and the SVR score decides.
-  std::string model = "linear";
-  int folds = 5;               // blocked CV: contiguous blocks in time
-  double min_gain = 0.03;      // a term is taken only if it cuts the CV MSE by more than this fraction
+  // Blocked CV: contiguous blocks in time. Ten, not the tuning's five: with five, each
+  // block is a whole regime of a chamber cycle (the hot soak, the cold ramp), and terms
+  // that happen to extrapolate into it win over the physical ones (docs/features.md).
+  int folds = 10;
+  // A set of k terms is scored CV(S) / (1 - min_gain)^k: a term must cut the CV MSE by more
+  // than this fraction to be taken. Smoothed gyro noise is correlated over minutes, so a
+  // chamber cycle holds few independent stretches of it and small gains are mostly noise
+  // followed by chance (docs/features.md has the measurements behind 10 %).
+  double min_gain = 0.10;
   std::size_t max_terms = 8;
-  std::size_t shortlist = 3;   // svr only
-  SvrOptions svr;              // svr only
+  std::size_t refine_top = 8;  // candidates of each forward step whose time constants are refined
+  long refine_budget = 60;     // sets scored per refinement (four times that for the final one)
+};
+
+// The SVR's judgement of the least-squares path (judge_by_svr).
+struct SvrJudgeOptions {
+  // Each set's SVR is tuned as the final fit will be, with `evaluations` as its budget;
+  // without tuning, it is scored at `fixed` by blocked CV over `folds`.
+  std::optional<SvrTuningOptions> tuning;
+  SvrOptions fixed;
+  int folds = 5;
+  long evaluations = 20;     // AFSA budget per judged set
+  std::size_t sets = 3;      // the last sets the search settled on
+  double min_gain = 0.10;    // the same penalty per term as the search
 };
 
 struct SelectionStep {
-  std::string action;  // "add", "tune" (a time constant moved) or "drop"
-  std::string term;    // the term(s) added or dropped, or "TAU -> TAU'" for a time constant
-  double cv_mse = 0;   // (°/h)², after the step
+  std::string action;  // "add", "drop", "tune" (time constants moved) or "svr" (a set judged by the SVR)
+  std::string term;    // the term(s) added or dropped, "TAU -> TAU'" moves, or the set judged
+  double cv_mse = 0;   // (°/h)², after the step (least squares; the SVR's for "svr")
   std::vector<std::string> terms;  // the set after the step
 };
 
 struct FeatureSelection {
   std::vector<std::string> terms;
+  std::string scored_by = "least_squares";  // "least_squares" or "least_squares+svr"
   double start_mse = 0;  // CV MSE of the constant model (°/h)²
   double cv_mse = 0;     // CV MSE of the chosen set, as scored
   std::vector<SelectionStep> path;
@@ -54,9 +73,16 @@ std::vector<std::string> base_candidate_terms();
 std::vector<double> time_constant_grid();
 
 // Chooses terms for one axis of the (time-ordered) training logs with `pipeline`'s
-// smoothing, rate span, decimation and reference. Throws UsageError when there are too
-// few samples for the folds.
+// smoothing, rate span, decimation and reference, by least squares. Throws UsageError
+// when there are too few samples for the folds.
 FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
                                  const FeatureSelectionOptions& options);
+
+// Of the sets `selection`'s search settled on after each addition (the last `sets` of
+// them), keeps the one whose AFSA-tuned SVR has the lowest penalized blocked CV MSE; adds
+// an "svr" step per set judged. A least-squares search proposes (it scores thousands of
+// sets in a second); the model that will be fitted decides.
+void judge_by_svr(FeatureSelection& selection, const std::vector<ChamberLog>& logs, std::size_t axis,
+                  const Pipeline& pipeline, const SvrJudgeOptions& options);
 
 }  // namespace thermodrift
