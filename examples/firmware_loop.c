@@ -38,17 +38,18 @@ static thermodrift_state compensator;
 
 /* Stand-in sensors: time t in s. */
 static double chamber_temperature(double t) { return 20.0 + t / 60.0; }
-static void read_sensors(double t, double gyro_dph[THERMODRIFT_AXES], double temperature_c[THERMODRIFT_AXES]) {
+/* temperature_c: one per axis, then any extra channel the model's grad terms read. */
+static void read_sensors(double t, double gyro_dph[THERMODRIFT_AXES], double temperature_c[THERMODRIFT_TEMPERATURES]) {
   int a;
+  for (a = 0; a < THERMODRIFT_TEMPERATURES; ++a) temperature_c[a] = chamber_temperature(t);
   for (a = 0; a < THERMODRIFT_AXES; ++a) {
-    temperature_c[a] = chamber_temperature(t);
     gyro_dph[a] = 15.0 + 0.5 + 0.03 * (temperature_c[a] - 20.0); /* true rate + drift */
   }
 }
 
 int main(void) {
   double gyro[THERMODRIFT_AXES];
-  double temperature[THERMODRIFT_AXES];
+  double temperature[THERMODRIFT_TEMPERATURES];
   double compensated[THERMODRIFT_AXES];
   double t;
   int was_ready = 0;

@@ -1,6 +1,7 @@
 // thermodrift compensate: the input rows with one compensated column per axis. Streams
 // row by row through the same Compensator a navigation computer would run.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cmath>
 #include <memory>
@@ -30,8 +31,13 @@ int run_compensate(const CompensateArguments& args) {
   const LogSpec spec = args.data.spec_for(model);
   CsvReader reader(path, spec.csv);
   const LogColumns columns = resolve_columns(spec, reader);
-  if (columns.temperature.size() != 1 && columns.temperature.size() != columns.gyro.size()) {
-    throw UsageError("give one temperature column for all axes or one per axis");
+  const std::size_t inputs = model.temperature_inputs();
+  const bool shared = columns.temperature.size() == 1 && model.extra_temperature_columns.empty();
+  if (!shared && columns.temperature.size() != inputs) {
+    throw UsageError(model.extra_temperature_columns.empty()
+                         ? "give one temperature column for all axes or one per axis"
+                         : fmt::format("the model reads {} temperature columns: one per axis, then {}", inputs,
+                                       fmt::join(model.extra_temperature_columns, ",")));
   }
   AtomicFile out(args.out, {path, args.model_file});
   auto& stream = out.stream();
@@ -44,7 +50,7 @@ int run_compensate(const CompensateArguments& args) {
 
   Compensator compensator(std::move(model));
   const std::size_t axes = compensator.axes();
-  std::vector<double> temperatures(axes);
+  std::vector<double> temperatures(inputs);
   LogSample sample;
   double previous_time = std::nan("");
   std::size_t row_index = 0;
@@ -54,9 +60,7 @@ int run_compensate(const CompensateArguments& args) {
     if (!read_sample(reader, *row, columns, spec, row_index, previous_time, sample)) continue;
     previous_time = sample.time;
     ++row_index;
-    for (std::size_t a = 0; a < axes; ++a) {
-      temperatures[a] = sample.temperature[sample.temperature.size() == 1 ? 0 : a];
-    }
+    for (std::size_t c = 0; c < inputs; ++c) temperatures[c] = sample.temperature[shared ? 0 : c];
     const auto& result = compensator.push(sample.time, sample.gyro, temperatures);
     line.assign(row->text);
     for (std::size_t a = 0; a < axes; ++a) {

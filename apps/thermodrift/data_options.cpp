@@ -20,7 +20,7 @@ void DataOptions::add_to(CLI::App& app) {
   app.add_option("--rate", rate, "sampling rate in Hz when there is no time column")
       ->check(CLI::PositiveNumber);
   app.add_option("--gyro", gyro, "gyro column(s), one model per axis")->delimiter(',');
-  app.add_option("--temp", temperature, "temperature column(s): one for all axes or one per axis")
+  app.add_option("--temp", temperature, "temperature column(s): one for all axes or one per axis, then any extra channels grad:A-B terms read")
       ->delimiter(',');
   app.add_option("--gyro-unit", gyro_unit, "unit of the gyro columns: dph (°/h), dps (°/s), radps")
       ->check(CLI::IsMember({"dph", "dps", "radps"}));

@@ -137,7 +137,7 @@ Command add_fit(CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
       ->check(CLI::PositiveNumber);
-  app->add_option("--features", args->features, "feature terms (default dT,rate, the seed's), or auto to choose them per axis by blocked CV; docs/features.md")->delimiter(',');
+  app->add_option("--features", args->features, "feature terms (default dT,rate, the seed's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, products, powers), or auto to choose them per axis by blocked CV; docs/features.md")->delimiter(',');
   app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
       ->check(CLI::IsMember({"afsa", "grid", "random"}));
   app->add_option("--objective", args->objective,

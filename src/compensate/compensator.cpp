@@ -25,7 +25,7 @@ const Compensator::Output& Compensator::push(double time, std::span<const double
                                              std::span<const double> temperatures) {
   bool ready = true;
   for (std::size_t a = 0; a < streams_.size(); ++a) {
-    const auto& sample = streams_[a].push(time, gyro[a], temperatures[a]);
+    const auto& sample = streams_[a].push(time, gyro[a], temperatures[a], temperatures);
     drift_[a] = model_.axes[a].predict(sample.features);
     compensated_[a] = gyro[a] - drift_[a];
     ready = ready && sample.ready;

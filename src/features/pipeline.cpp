@@ -20,6 +20,16 @@ std::vector<std::string> Pipeline::term_names() const {
   return names;
 }
 
+std::vector<std::size_t> Pipeline::channels() const {
+  std::vector<std::size_t> out;
+  for (const auto& term : terms) {
+    for (const std::size_t channel : term.channels()) out.push_back(channel);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 void Pipeline::validate() const {
   auto finite_nonnegative = [](double value) { return std::isfinite(value) && value >= 0; };
   if (!finite_nonnegative(smooth_seconds)) {
@@ -92,42 +102,20 @@ std::size_t default_decimation(double smooth_seconds, double sample_interval_sec
   return std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(per_window / 10.0)));
 }
 
-FeatureStream::FeatureStream(const Pipeline& pipeline)
-    : pipeline_(&pipeline),
-      gyro_mean_(pipeline.smooth_seconds),
-      temperature_mean_(pipeline.smooth_seconds),
-      history_(),
-      terms_(pipeline.terms),
-      features_(pipeline.terms.size()) {
-  sample_.features = features_;
-}
+SmoothedChannel::SmoothedChannel(double smooth_seconds, double rate_span_seconds)
+    : mean_(smooth_seconds), span_(rate_span_seconds) {}
 
-void FeatureStream::reset() {
-  gyro_mean_.reset();
-  temperature_mean_.reset();
+void SmoothedChannel::reset() {
+  mean_.reset();
   history_.clear();
   history_head_ = 0;
-  started_ = false;
 }
 
-const FeatureStream::Sample& FeatureStream::push(double time, double gyro, double temperature) {
-  if (started_ && time - last_time_ > pipeline_->effective_gap_seconds()) reset();
-  const double step_seconds = started_ ? time - last_time_ : 0.0;  // 0: lags start in equilibrium
-  if (!started_) {
-    started_ = true;
-    start_time_ = time;
-  }
-  last_time_ = time;
-  sample_.smoothed_gyro = gyro_mean_.push(time, gyro);
-  const double smoothed = temperature_mean_.push(time, temperature);
-  sample_.smoothed_temperature = smoothed;
-
-  // History of the smoothed temperature over the last rate span: the oldest kept entry
-  // is the last one at or before t - span, so the difference spans at least `span`.
+SmoothedChannel::Value SmoothedChannel::push(double time, double temperature) {
+  const double smoothed = mean_.push(time, temperature);
   // Compacted when half dead, so the cost stays O(1) amortised with no per-sample allocation.
-  const double span = pipeline_->rate_span_seconds;
   history_.push_back({time, smoothed});
-  while (history_.size() - history_head_ >= 2 && history_[history_head_ + 1].time <= time - span) {
+  while (history_.size() - history_head_ >= 2 && history_[history_head_ + 1].time <= time - span_) {
     ++history_head_;
   }
   if (history_head_ > 64 && history_head_ * 2 > history_.size()) {
@@ -136,9 +124,53 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
   }
   const Stamped& past = history_[history_head_];
   const double elapsed = time - past.time;
-  const double rate_per_minute = elapsed > 0 ? (smoothed - past.value) / elapsed * 60.0 : 0.0;
+  return {smoothed, elapsed > 0 ? (smoothed - past.value) / elapsed * 60.0 : 0.0};
+}
 
-  terms_.push(smoothed - pipeline_->reference_temperature, rate_per_minute, step_seconds, features_);
+FeatureStream::FeatureStream(const Pipeline& pipeline)
+    : pipeline_(&pipeline),
+      gyro_mean_(pipeline.smooth_seconds),
+      temperature_(pipeline.smooth_seconds, pipeline.rate_span_seconds),
+      channels_(pipeline.channels()),
+      channel_filters_(channels_.size(), SmoothedChannel(pipeline.smooth_seconds, pipeline.rate_span_seconds)),
+      channel_means_(channels_.empty() ? 0 : channels_.back() + 1),
+      channel_rates_(channel_means_.size()),
+      terms_(pipeline.terms),
+      features_(pipeline.terms.size()) {
+  sample_.features = features_;
+}
+
+void FeatureStream::reset() {
+  gyro_mean_.reset();
+  temperature_.reset();
+  for (auto& filter : channel_filters_) filter.reset();
+  started_ = false;
+}
+
+const FeatureStream::Sample& FeatureStream::push(double time, double gyro, double temperature,
+                                                 std::span<const double> channels) {
+  if (started_ && time - last_time_ > pipeline_->effective_gap_seconds()) reset();
+  const double step_seconds = started_ ? time - last_time_ : 0.0;  // 0: lags start in equilibrium
+  if (!started_) {
+    started_ = true;
+    start_time_ = time;
+  }
+  last_time_ = time;
+  sample_.smoothed_gyro = gyro_mean_.push(time, gyro);
+  const SmoothedChannel::Value own = temperature_.push(time, temperature);
+  sample_.smoothed_temperature = own.mean;
+  for (std::size_t i = 0; i < channels_.size(); ++i) {
+    const std::size_t channel = channels_[i];
+    if (channel >= channels.size()) {
+      throw UsageError(fmt::format("the feature terms read temperature channel {}, but {} channel(s) are given",
+                                   channel + 1, channels.size()));
+    }
+    const SmoothedChannel::Value value = channel_filters_[i].push(time, channels[channel]);
+    channel_means_[channel] = value.mean;
+    channel_rates_[channel] = value.rate;
+  }
+  terms_.push({own.mean - pipeline_->reference_temperature, own.rate, step_seconds, channel_means_, channel_rates_},
+              features_);
   sample_.ready = time - start_time_ >= pipeline_->warm_up_seconds();
   return sample_;
 }
@@ -152,9 +184,11 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
   std::vector<double> target;
   FeatureTable table;
   std::size_t ready_count = 0;
+  std::vector<double> channels(pipeline.channels().empty() ? 0 : log.temperature.size());
   for (std::size_t i = 0; i < log.rows(); ++i) {
+    for (std::size_t c = 0; c < channels.size(); ++c) channels[c] = log.temperature[c][i];
     const auto& sample = stream.push(log.time[i], log.gyro[gyro_axis][i],
-                                     log.temperature[temperature_channel][i]);
+                                     log.temperature[temperature_channel][i], channels);
     if (!sample.ready) {
       ready_count = 0;  // decimation restarts with each warm-up
       continue;

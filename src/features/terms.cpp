@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <string_view>
+#include <utility>
+#include <algorithm>
 
 #include "thermodrift/error.hpp"
 
@@ -14,7 +16,8 @@ namespace thermodrift {
 namespace {
 
 constexpr std::string_view kKnownTerms =
-    "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], products A*B and powers A^2";
+    "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, "
+    "products A*B and powers A^2";
 constexpr double kMaxTimeConstant = 1e6;  // s; eleven days is no thermal lag of a gyro
 constexpr int kMaxPower = 4;
 
@@ -45,6 +48,24 @@ double parse_time_constant(const std::string& term, std::string_view text) {
   return value;
 }
 
+// "A-B": two different 1-based channel numbers, returned 0-based.
+std::pair<std::size_t, std::size_t> parse_channels(const std::string& term, std::string_view text) {
+  const auto parts = split(text, '-');
+  std::size_t channels[2] = {0, 0};
+  bool valid = parts.size() == 2;
+  for (std::size_t i = 0; valid && i < 2; ++i) {
+    const std::string_view digits = parts[i];
+    valid = !digits.empty() && digits.size() <= 2 && digits.find_first_not_of("0123456789") == std::string_view::npos;
+    if (valid) channels[i] = std::stoul(std::string(digits));
+    valid = valid && channels[i] >= 1 && channels[i] <= kMaxTemperatureChannels;
+  }
+  if (!valid || channels[0] == channels[1]) {
+    bad_term(term, fmt::format("'{}' must be two different temperature channel numbers A-B, 1..{}", text,
+                               kMaxTemperatureChannels));
+  }
+  return {channels[0] - 1, channels[1] - 1};
+}
+
 FeatureAtom parse_atom(const std::string& term, std::string_view text) {
   using Kind = FeatureAtom::Kind;
   if (text == "dT") return {Kind::delta_t};
@@ -60,8 +81,16 @@ FeatureAtom parse_atom(const std::string& term, std::string_view text) {
     if (parts.size() != 2) bad_term(term, fmt::format("{} takes one time constant: {}:TAU", head, head));
     return {head == "lag" ? Kind::lag : Kind::lag_rate, parse_time_constant(term, parts[1])};
   }
+  if ((head == "grad" || head == "gradrate") && parts.size() == 2 && parts[1].find('-') != std::string_view::npos) {
+    const auto [a, b] = parse_channels(term, parts[1]);
+    FeatureAtom atom{head == "grad" ? Kind::channel_gradient : Kind::channel_gradient_rate};
+    atom.channel = a;
+    atom.channel2 = b;
+    return atom;
+  }
+  if (head == "grad") bad_term(term, "grad takes two temperature channels: grad:A-B");
   if (head == "gradrate") {
-    if (parts.size() != 3) bad_term(term, "gradrate takes two time constants: gradrate:TAU:TG");
+    if (parts.size() != 3) bad_term(term, "gradrate takes two time constants, gradrate:TAU:TG, or two channels, gradrate:A-B");
     return {Kind::gradient_rate, parse_time_constant(term, parts[1]), parse_time_constant(term, parts[2])};
   }
   if (head == "dir") {
@@ -88,6 +117,8 @@ std::string FeatureAtom::name() const {
     case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", tau, tau2);
     case Kind::direction: return tau2 > 0 ? fmt::format("dir:{}:{}", tau, tau2) : fmt::format("dir:{}", tau);
     case Kind::input: return fmt::format("x{}", input_index + 1);
+    case Kind::channel_gradient: return fmt::format("grad:{}-{}", channel + 1, channel2 + 1);
+    case Kind::channel_gradient_rate: return fmt::format("gradrate:{}-{}", channel + 1, channel2 + 1);
   }
   return "?";
 }
@@ -129,6 +160,17 @@ bool FeatureTerm::uses_input() const {
   return false;
 }
 
+std::vector<std::size_t> FeatureTerm::channels() const {
+  std::vector<std::size_t> out;
+  for (const auto& factor : factors) {
+    if (factor.atom.reads_channels()) {
+      out.push_back(factor.atom.channel);
+      out.push_back(factor.atom.channel2);
+    }
+  }
+  return out;
+}
+
 double lag_step(double state, double input, double step_seconds, double tau) {
   if (!(step_seconds > 0)) return input;
   const double a = std::exp(-step_seconds / tau);
@@ -141,12 +183,13 @@ TermEvaluator::TermEvaluator(const std::vector<FeatureTerm>& terms) : terms_(&te
   states_.resize(factors);
 }
 
-double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, double delta_t, double rate,
-                                 double step_seconds) {
+double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const TermInputs& inputs) {
   using Kind = FeatureAtom::Kind;
+  const double delta_t = inputs.delta_t;
+  const double step_seconds = inputs.step_seconds;
   switch (atom.kind) {
     case Kind::delta_t: return delta_t;
-    case Kind::rate: return rate;
+    case Kind::rate: return inputs.rate;
     case Kind::lag:
       state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
       return state.first;
@@ -160,7 +203,7 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, double d
       return (coil_rate - state.second) / atom.tau2 * 60.0;
     }
     case Kind::direction: {
-      double source = rate;
+      double source = inputs.rate;
       if (atom.tau2 > 0) {
         state.first = lag_step(state.first, delta_t, step_seconds, atom.tau2);
         source = (delta_t - state.first) / atom.tau2 * 60.0;
@@ -168,17 +211,26 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, double d
       state.second = lag_step(state.second, tanh_by_exp(source / kDirectionRateScale), step_seconds, atom.tau);
       return state.second;
     }
+    case Kind::channel_gradient:
+    case Kind::channel_gradient_rate: {
+      const auto& values = atom.kind == Kind::channel_gradient ? inputs.channel_means : inputs.channel_rates;
+      if (std::max(atom.channel, atom.channel2) >= values.size()) {
+        throw UsageError(fmt::format("feature term '{}' reads temperature channel {}, but {} channel(s) are given",
+                                     atom.name(), std::max(atom.channel, atom.channel2) + 1, values.size()));
+      }
+      return values[atom.channel] - values[atom.channel2];
+    }
     case Kind::input: return 0;  // libsvm models never stream (Compensator refuses them)
   }
   return 0;
 }
 
-void TermEvaluator::push(double delta_t, double rate, double step_seconds, std::span<double> values) {
+void TermEvaluator::push(const TermInputs& inputs, std::span<double> values) {
   std::size_t s = 0;
   for (std::size_t i = 0; i < terms_->size(); ++i) {
     double value = 1;
     for (const auto& factor : (*terms_)[i].factors) {
-      const double atom = atom_value(factor.atom, states_[s++], delta_t, rate, step_seconds);
+      const double atom = atom_value(factor.atom, states_[s++], inputs);
       for (int p = 0; p < factor.power; ++p) value *= atom;
     }
     values[i] = value;

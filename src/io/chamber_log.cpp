@@ -116,6 +116,15 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
       throw UsageError(fmt::format(
           "{}: no column named temp*; name the temperature columns with --temp", reader.path()));
     }
+    // Found by name, channels beyond one per axis would be paired with the axes by their
+    // order in the file (a chamber column first would feed the first axis): ask instead.
+    if (columns.temperature.size() != 1 && columns.temperature.size() != columns.gyro.size()) {
+      std::vector<std::string> names;
+      for (auto index : columns.temperature) names.push_back(column_label(reader, index));
+      throw UsageError(fmt::format("{}: {} temp* columns ({}) for {} gyro axes; name one for all axes or one "
+                                   "per axis with --temp (further columns serve grad terms)",
+                                   reader.path(), names.size(), fmt::join(names, ","), columns.gyro.size()));
+    }
   } else {
     for (const auto& name : spec.temperature_columns) {
       columns.temperature.push_back(find_column(name, reader, "temperature"));

@@ -33,6 +33,7 @@ LogSpec DriftModel::log_spec() const {
     spec.gyro_columns.push_back(axis.gyro_column);
     spec.temperature_columns.push_back(axis.temperature_column);
   }
+  for (const auto& column : extra_temperature_columns) spec.temperature_columns.push_back(column);
   return spec;
 }
 
@@ -55,6 +56,7 @@ nlohmann::json to_json(const DriftModel& model) {
                          {"axes", axes}};
   if (model.time_column) json["time_column"] = *model.time_column;
   if (model.rate_hz) json["rate_hz"] = *model.rate_hz;
+  if (!model.extra_temperature_columns.empty()) json["extra_temperature_columns"] = model.extra_temperature_columns;
   return json;
 }
 
@@ -73,6 +75,9 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
     model.gyro_unit = parse_gyro_unit(json.at("gyro_unit").get<std::string>());
     if (json.contains("time_column")) model.time_column = json.at("time_column").get<std::string>();
     if (json.contains("rate_hz")) model.rate_hz = json.at("rate_hz").get<double>();
+    if (json.contains("extra_temperature_columns")) {
+      model.extra_temperature_columns = json.at("extra_temperature_columns").get<std::vector<std::string>>();
+    }
     if (!json.at("axes").is_array() || json.at("axes").empty()) throw fail("model file has no axes");
     std::size_t index = 0;
     for (const auto& entry : json.at("axes")) {
@@ -96,6 +101,13 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
           throw Error(fmt::format("unknown model kind '{}'", axis.kind));
         }
         axis.fit = entry.value("fit", nlohmann::json::object());
+        const std::size_t inputs = json.at("axes").size() + model.extra_temperature_columns.size();
+        for (const std::size_t channel : axis.pipeline.channels()) {
+          if (channel >= inputs) {
+            throw Error(fmt::format("a grad term reads temperature channel {}, but the model has {} temperature "
+                                    "input(s)", channel + 1, inputs));
+          }
+        }
         model.axes.push_back(std::move(axis));
       } catch (const DataError&) {
         throw;

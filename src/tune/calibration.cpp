@@ -15,13 +15,37 @@ namespace thermodrift {
 std::vector<std::size_t> temperature_channel_per_axis(const ChamberLog& log) {
   std::vector<std::size_t> channels(log.axes(), 0);
   if (log.temperature.size() == 1) return channels;
-  if (log.temperature.size() == log.axes()) {
+  if (log.temperature.size() >= log.axes()) {
     for (std::size_t a = 0; a < channels.size(); ++a) channels[a] = a;
     return channels;
   }
   throw UsageError(fmt::format("{}: {} temperature columns for {} gyro axes; give one for all "
-                               "axes or one per axis with --temp",
+                               "axes or one per axis with --temp (further columns serve grad terms)",
                                log.source, log.temperature.size(), log.axes()));
+}
+
+std::vector<std::string> extra_temperature_columns(const std::vector<ChamberLog>& logs, const LogSpec& spec,
+                                                   const std::vector<Pipeline>& pipelines) {
+  const ChamberLog& log = logs.front();
+  std::size_t used = 0;  // channels up to the highest a grad term reads
+  for (const auto& pipeline : pipelines) {
+    for (const std::size_t channel : pipeline.channels()) used = std::max(used, channel + 1);
+  }
+  if (used == 0) return {};
+  if (log.temperature.size() < log.axes() || (log.temperature.size() == 1 && log.axes() > 1)) {
+    throw UsageError(fmt::format("grad terms need one temperature column per axis (then any others) with "
+                                 "--temp; {} has {} for {} axes",
+                                 log.source, log.temperature.size(), log.axes()));
+  }
+  if (used > log.temperature.size()) {
+    throw UsageError(fmt::format("a grad term reads temperature channel {}, but --temp gives {} column(s)", used,
+                                 log.temperature.size()));
+  }
+  std::vector<std::string> extra;
+  for (std::size_t c = log.axes(); c < used; ++c) {
+    extra.push_back(spec.temperature_columns.empty() ? log.temperature_names[c] : spec.temperature_columns[c]);
+  }
+  return extra;
 }
 
 FeatureTable feature_table(const std::vector<ChamberLog>& logs, const Pipeline& pipeline,
@@ -293,6 +317,9 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     calibration.model.axes.push_back(std::move(axis_model));
     calibration.axes.push_back(report);
   }
+  std::vector<Pipeline> pipelines;
+  for (const auto& axis : calibration.model.axes) pipelines.push_back(axis.pipeline);
+  calibration.model.extra_temperature_columns = extra_temperature_columns(logs, spec, pipelines);
   return calibration;
 }
 

@@ -173,6 +173,19 @@ std::vector<std::string> base_candidate_terms() {
   return out;
 }
 
+std::vector<std::string> channel_candidate_terms(const ChamberLog& log, std::size_t axis) {
+  const std::size_t channels = log.temperature.size();
+  if (channels < 2 || channels < log.axes()) return {};
+  const std::size_t own = temperature_channel_per_axis(log).at(axis);
+  std::vector<std::string> out;
+  for (std::size_t other = 0; other < channels && other < kMaxTemperatureChannels; ++other) {
+    if (other == own) continue;
+    out.push_back(fmt::format("grad:{}-{}", own + 1, other + 1));
+    out.push_back(fmt::format("gradrate:{}-{}", own + 1, other + 1));
+  }
+  return out;
+}
+
 nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options) const {
   nlohmann::json steps = nlohmann::json::array();
   for (const auto& step : path) {
@@ -312,6 +325,7 @@ FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_
   // and its rate enter together).
   std::vector<Terms> candidates;
   for (const auto& term : base_candidate_terms()) candidates.push_back({term});
+  for (const auto& term : channel_candidate_terms(logs.front(), axis)) candidates.push_back({term});
   for (const double tau : time_constant_grid()) {
     candidates.push_back({fmt::format("lag:{}", tau), fmt::format("lagrate:{}", tau)});
     candidates.push_back({fmt::format("lag:{}", tau), fmt::format("lagrate:{}", tau), fmt::format("lag:{}^2", tau)});

@@ -8,6 +8,7 @@
 // sanitize preset leaves this label out.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,9 @@ TEST(ThermalLagAcceptance, ChosenFeaturesBringSvrWithinThreeTimesTheNoiseFloor) 
     EXPECT_EQ(fit["tuning"]["method"], "afsa");
     const double chosen_ratio = svr_chosen.held_out[axis].mse_after / floor;
     const double seed_ratio = svr_seed.held_out[axis].mse_after / floor;
+    std::printf("%s: held-out MSE / noise floor: SVR + AFSA chosen %.2f, seed pair %.1f; linear chosen %.2f; %s\n",
+                name.c_str(), chosen_ratio, seed_ratio, linear_chosen.held_out[axis].mse_after / floor,
+                fit["terms"].dump().c_str());
     EXPECT_LT(chosen_ratio, 3.0) << name << ": " << fit["terms"].dump();
     EXPECT_GT(seed_ratio, 20.0) << name;  // what the seed's pair leaves: tens to hundreds of floors
     EXPECT_LT(linear_chosen.held_out[axis].mse_after / floor, 3.0) << name;

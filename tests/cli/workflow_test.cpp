@@ -398,5 +398,42 @@ TEST_F(Workflow, ModelReadingColumnsTheDataLacksIsExit3) {
   EXPECT_TRUE(contains(result.err, "renamed.csv:1: no gyro column named 'gyro_y'")) << result.err;
 }
 
+// grad terms on the chamber air, given after the axes' own channels: the model names the
+// extra column, compensate and evaluate read it by name, and a log without it is refused.
+TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
+  copy(cycle1_, "cycle1.csv");
+  copy(cycle2_, "cycle2.csv");
+  const auto fit = thermodrift(dir_, "fit --data cycle1.csv --temp temp_x,temp_y,temp_z,temp_chamber --model linear "
+                                     "--features dT,lag:600,grad:1-4,gradrate:1-4 --out grad.json --json");
+  ASSERT_EQ(fit.status, 0) << fit.err;
+  const auto model = nlohmann::json::parse(read_file(dir_.file("grad.json")));
+  EXPECT_EQ(model.at("extra_temperature_columns"), nlohmann::json::array({"temp_chamber"}));
+  EXPECT_EQ(model["axes"][2]["temperature_column"], "temp_z");
+
+  const auto evaluated = thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --json");
+  ASSERT_EQ(evaluated.status, 0) << evaluated.err;
+  for (const auto& axis : nlohmann::json::parse(evaluated.out)["axes"]) {
+    EXPECT_LT(axis.at("mse_after").get<double>(), axis.at("mse_before").get<double>()) << axis.dump();
+  }
+  const auto compensated = thermodrift(dir_, "compensate --model grad.json --data cycle2.csv --out out.csv");
+  ASSERT_EQ(compensated.status, 0) << compensated.err;
+  EXPECT_EQ(split_lines(read_file(dir_.file("out.csv"))).size(), split_lines(read_file(cycle2_)).size());
+
+  // The axes' three columns only: the model's fourth is missing, said in one line.
+  const auto short_of_one = thermodrift(dir_, "compensate --model grad.json --data cycle2.csv" + kTemps +
+                                                  " --out short.csv");
+  EXPECT_EQ(short_of_one.status, 2) << short_of_one.err;
+  expect_one_line(short_of_one);
+  EXPECT_TRUE(contains(short_of_one.err, "temp_chamber")) << short_of_one.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_.file("short.csv")));
+
+  // A grad term reading a channel --temp does not give is a usage error.
+  const auto beyond = thermodrift(dir_, "fit --data cycle1.csv" + kTemps + " --model linear --features dT,grad:1-4 "
+                                                                            "--out beyond.json");
+  EXPECT_EQ(beyond.status, 2) << beyond.err;
+  expect_one_line(beyond);
+  EXPECT_TRUE(contains(beyond.err, "temperature channel 4")) << beyond.err;
+}
+
 }  // namespace
 }  // namespace thermodrift

@@ -26,7 +26,8 @@ class Compensator {
     bool ready = false;                   // false during warm-up (start or after a gap)
   };
 
-  // `gyro` in °/h, one per axis; `temperatures`, one per axis. `time` must increase.
+  // `gyro` in °/h, one per axis; `temperatures`, one per axis then the model's extra
+  // channels (model().temperature_inputs() in all). `time` must increase.
   // During warm-up the drift is predicted from the history there is (a partial window,
   // a shorter rate span): the best causal estimate, flagged by ready = false.
   const Output& push(double time, std::span<const double> gyro, std::span<const double> temperatures);

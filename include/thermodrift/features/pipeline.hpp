@@ -37,6 +37,8 @@ struct Pipeline {
   double warm_up_seconds() const { return smooth_seconds + rate_span_seconds; }
   double effective_gap_seconds() const;
   std::vector<std::string> term_names() const;
+  // The temperature channels (0-based, sorted, distinct) its grad terms read.
+  std::vector<std::size_t> channels() const;
   void validate() const;  // UsageError on nonsense (negative window, no terms, ...)
 
   nlohmann::json to_json() const;
@@ -46,6 +48,30 @@ struct Pipeline {
 // Decimation giving about ten samples per smoothing window: neighbours of a 100 s mean
 // carry almost no new information, and SVR cost grows with n².
 std::size_t default_decimation(double smooth_seconds, double sample_interval_seconds);
+
+// One temperature channel through the pipeline: its trailing mean over the smoothing
+// window and the backward difference of that mean over the rate span (to the last mean
+// at or before t - span, so the difference spans at least the span).
+class SmoothedChannel {
+ public:
+  SmoothedChannel(double smooth_seconds, double rate_span_seconds);
+  struct Value {
+    double mean = 0;  // °C
+    double rate = 0;  // °C/min
+  };
+  Value push(double time, double temperature);
+  void reset();
+
+ private:
+  struct Stamped {
+    double time;
+    double value;
+  };
+  TrailingMean mean_;
+  double span_;
+  std::vector<Stamped> history_;  // the mean over the last rate span
+  std::size_t history_head_ = 0;
+};
 
 // Streaming state of the pipeline for one axis: push one sample, read its features.
 class FeatureStream {
@@ -59,20 +85,20 @@ class FeatureStream {
     std::span<const double> features;  // one value per pipeline term
   };
 
-  // `time` must increase; `temperature` is the axis's temperature channel.
-  const Sample& push(double time, double gyro, double temperature);
+  // `time` must increase; `temperature` is the axis's temperature channel; `channels`,
+  // every temperature channel in order, is read only by grad terms (UsageError when one
+  // they read is missing).
+  const Sample& push(double time, double gyro, double temperature, std::span<const double> channels = {});
   void reset();
 
  private:
-  struct Stamped {
-    double time;
-    double value;
-  };
   const Pipeline* pipeline_;
   TrailingMean gyro_mean_;
-  TrailingMean temperature_mean_;
-  std::vector<Stamped> history_;  // smoothed temperature over the last rate span
-  std::size_t history_head_ = 0;
+  SmoothedChannel temperature_;
+  std::vector<std::size_t> channels_;            // read by grad terms, 0-based
+  std::vector<SmoothedChannel> channel_filters_;  // one per entry of channels_
+  std::vector<double> channel_means_;            // indexed by channel number
+  std::vector<double> channel_rates_;
   bool started_ = false;
   double start_time_ = 0;
   double last_time_ = 0;

@@ -12,6 +12,10 @@
 //                    (the Shupe term: the radial gradient follows the coil rate with a lag)
 //   dir:TAU[:LAG]    a lag (TAU) of tanh(r / 0.2 °C/min), r the smoothed rate, or
 //                    lagrate:LAG when given: a heating (+1) / cooling (-1) memory, unitless
+//   grad:A-B         T_A - T_B, the difference of two smoothed temperature channels, °C
+//                    (A, B: 1-based channel numbers in the log's --temp order; a gradient
+//                    across the unit, say housing minus chamber or coil minus mount)
+//   gradrate:A-B     its rate, the backward difference over the rate span, °C/min
 //   xN               column N of libsvm-format data, as given (never streamed)
 // A term is one atom or a product of atoms with powers: "dT^2", "dT*rate", "lag:600^2*rate".
 //
@@ -30,12 +34,20 @@ namespace thermodrift {
 // r0 of dir: rates well above it (ramps) saturate the indicator, soaks bring it to 0.
 inline constexpr double kDirectionRateScale = 0.2;  // °C/min
 
+// Channels a grad term can name: enough for every sensor of a multi-gyro unit.
+inline constexpr std::size_t kMaxTemperatureChannels = 64;
+
 struct FeatureAtom {
-  enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input };
+  enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input, channel_gradient,
+                    channel_gradient_rate };
   Kind kind = Kind::delta_t;
   double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory)
   double tau2 = 0;              // s: gradrate (gradient lag); dir (lag of its rate, 0: smoothed rate)
   std::size_t input_index = 0;  // 0-based column, for Kind::input
+  std::size_t channel = 0;      // 0-based temperature channels A and B of grad / gradrate:A-B
+  std::size_t channel2 = 0;
+
+  bool reads_channels() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
 
   std::string name() const;
   bool operator==(const FeatureAtom&) const = default;
@@ -61,7 +73,20 @@ struct FeatureTerm {
   // The kind of a plain atom (one factor, power 1); Kind::input also for libsvm columns.
   bool is_atom(Kind kind) const { return factors.size() == 1 && factors[0].power == 1 && factors[0].atom.kind == kind; }
   bool uses_input() const;
+  // The temperature channels (0-based) its grad atoms read, in order, with repeats.
+  std::vector<std::size_t> channels() const;
   bool operator==(const FeatureTerm&) const = default;
+};
+
+// What the terms of one sample are computed from.
+struct TermInputs {
+  double delta_t = 0;       // ΔT of the axis' smoothed temperature, °C
+  double rate = 0;          // its rate, °C/min
+  double step_seconds = 0;  // since the previous sample; 0 at a (re)start: lags set in equilibrium
+  // Smoothed temperature and rate (°C, °C/min) of each channel, indexed by channel number;
+  // only the channels the grad terms read need to hold values.
+  std::span<const double> channel_means;
+  std::span<const double> channel_rates;
 };
 
 // The streaming state of a list of terms: two filter states per factor, no allocation
@@ -70,17 +95,20 @@ class TermEvaluator {
  public:
   explicit TermEvaluator(const std::vector<FeatureTerm>& terms);
 
-  // One sample: ΔT (°C) and rate (°C/min) of the smoothed temperature, `step_seconds`
-  // since the previous sample (0 at the first sample after a (re)start, which sets every
-  // lag in equilibrium). Writes one value per term.
-  void push(double delta_t, double rate, double step_seconds, std::span<double> values);
+  // One sample; writes one value per term. A grad term whose channel is not in the
+  // inputs is a UsageError.
+  void push(const TermInputs& inputs, std::span<double> values);
+  // The same for terms that read no temperature channel but the axis' own.
+  void push(double delta_t, double rate, double step_seconds, std::span<double> values) {
+    push(TermInputs{delta_t, rate, step_seconds, {}, {}}, values);
+  }
 
  private:
   struct State {
     double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG)
     double second = 0;  // G (gradrate) or the direction memory (dir)
   };
-  double atom_value(const FeatureAtom& atom, State& state, double delta_t, double rate, double step_seconds);
+  double atom_value(const FeatureAtom& atom, State& state, const TermInputs& inputs);
 
   const std::vector<FeatureTerm>* terms_;
   std::vector<State> states_;  // one per factor, in order

@@ -38,9 +38,15 @@ struct DriftModel {
   std::optional<std::string> time_column;  // as in the training log's LogSpec
   std::optional<double> rate_hz;
   std::vector<AxisModel> axes;
+  // Temperature columns after the axes' own, read only by grad terms (as named to the
+  // reader). The model's temperature inputs are the axes' columns, then these: channel
+  // numbers of grad terms count in that order, as in the training log's --temp list.
+  std::vector<std::string> extra_temperature_columns;
 
   // The LogSpec that reads a log the way the training log was read.
   LogSpec log_spec() const;
+  // Temperature inputs a sample needs: one per axis, then the extra channels.
+  std::size_t temperature_inputs() const { return axes.size() + extra_temperature_columns.size(); }
 };
 
 nlohmann::json to_json(const DriftModel& model);

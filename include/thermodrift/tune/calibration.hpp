@@ -44,9 +44,15 @@ bool chooses_features(const CalibrationOptions& options);
 std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
                                                        const CalibrationOptions& options);
 
-// Which temperature channel feeds each axis: one channel for all axes, or one per axis.
-// Throws UsageError otherwise.
+// Which temperature channel feeds each axis: one channel for all axes, or one per axis
+// (channel a for axis a; channels after those serve grad terms). Throws UsageError otherwise.
 std::vector<std::size_t> temperature_channel_per_axis(const ChamberLog& log);
+
+// The temperature columns after the axes' own that the grad terms of `pipelines` read,
+// up to the highest (DriftModel::extra_temperature_columns). UsageError when a term reads
+// a channel the log does not have, or the log has no column per axis to count from.
+std::vector<std::string> extra_temperature_columns(const std::vector<ChamberLog>& logs, const LogSpec& spec,
+                                                   const std::vector<Pipeline>& pipelines);
 
 struct AxisCalibration {
   ResidualMetrics in_sample;   // on every ready (undecimated) sample of the training logs

@@ -69,6 +69,9 @@ struct FeatureSelection {
 // The candidate terms the greedy search starts from (before conditional ones such as
 // gradrate:TAU:TG, offered once lag:TAU or lagrate:TAU is chosen).
 std::vector<std::string> base_candidate_terms();
+// With several temperature channels (one per axis, or more): the difference of the
+// axis' own channel and each other one, and its rate (grad:A-B, gradrate:A-B).
+std::vector<std::string> channel_candidate_terms(const ChamberLog& log, std::size_t axis);
 // The lag time-constant grid, s: 60·√2^k up to about an hour.
 std::vector<double> time_constant_grid();
 

@@ -83,7 +83,25 @@ DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const st
     }
     model.axes.push_back(std::move(axis));
   }
+  // Channels after the axes' own, up to the highest a grad term reads.
+  std::size_t used = 0;
+  for (const auto& axis : model.axes) {
+    for (const std::size_t channel : axis.pipeline.channels()) used = std::max(used, channel + 1);
+  }
+  for (std::size_t c = log.axes(); c < used; ++c) model.extra_temperature_columns.push_back(log.temperature_names[c]);
   return model;
+}
+
+// The simulated log with the chamber air as a fourth temperature channel.
+ChamberLog with_chamber_channel(const ChamberLog& log) {
+  sim::SimulatorOptions options;
+  options.cycles = 1;
+  options.rate_hz = 1.0;
+  const sim::ChamberRun run = sim::simulate(options);
+  ChamberLog out = log;
+  out.temperature_names.push_back("temp_chamber");
+  out.temperature.push_back(run.column("temp_chamber"));
+  return out;
 }
 
 constexpr const char* kDriver = R"(#include <stdio.h>
@@ -94,7 +112,7 @@ int main(int argc, char** argv) {
   static thermodrift_state state;
   double time;
   double gyro[THERMODRIFT_AXES];
-  double temperature[THERMODRIFT_AXES];
+  double temperature[THERMODRIFT_TEMPERATURES];
   double compensated[THERMODRIFT_AXES];
   FILE* in;
   int a;
@@ -105,7 +123,7 @@ int main(int argc, char** argv) {
     for (a = 0; a < THERMODRIFT_AXES; ++a) {
       if (fscanf(in, "%lf", &gyro[a]) != 1) return 3;
     }
-    for (a = 0; a < THERMODRIFT_AXES; ++a) {
+    for (a = 0; a < THERMODRIFT_TEMPERATURES; ++a) {
       if (fscanf(in, "%lf", &temperature[a]) != 1) return 3;
     }
     ready = thermodrift_step(&state, time, gyro, temperature, compensated);
@@ -114,6 +132,7 @@ int main(int argc, char** argv) {
     printf("\n");
   }
   printf("dropped %lu\n", state.dropped_samples);
+  printf("state_bytes %lu\n", (unsigned long)sizeof state);
   fclose(in);
   return 0;
 }
@@ -123,6 +142,7 @@ struct CRun {
   std::vector<int> ready;
   std::vector<std::vector<double>> compensated;  // [row][axis]
   unsigned long dropped = 0;
+  unsigned long state_bytes = 0;  // sizeof the state struct as the compiler laid it out
 };
 
 // Writes the header, compiles the driver with it under strict C99 and runs it on `log`.
@@ -147,9 +167,9 @@ CRun run_exported(const TempDir& dir, const std::string& header, const ChamberLo
   CRun result;
   for (const auto& line : testing::split_lines(ran.out)) {
     std::istringstream in(line);
-    if (line.rfind("dropped", 0) == 0) {
+    if (line.rfind("dropped", 0) == 0 || line.rfind("state_bytes", 0) == 0) {
       std::string word;
-      in >> word >> result.dropped;
+      in >> word >> (line[0] == 'd' ? result.dropped : result.state_bytes);
       continue;
     }
     int ready = 0;
@@ -172,12 +192,10 @@ CppRun run_compensator(const DriftModel& model, const ChamberLog& log) {
   Compensator compensator(model);
   CppRun result;
   std::vector<double> gyro(log.axes());
-  std::vector<double> temperature(log.axes());
+  std::vector<double> temperature(log.temperature.size());
   for (std::size_t i = 0; i < log.rows(); ++i) {
-    for (std::size_t a = 0; a < log.axes(); ++a) {
-      gyro[a] = log.gyro[a][i];
-      temperature[a] = log.temperature[a][i];
-    }
+    for (std::size_t a = 0; a < log.axes(); ++a) gyro[a] = log.gyro[a][i];
+    for (std::size_t c = 0; c < temperature.size(); ++c) temperature[c] = log.temperature[c][i];
     const auto& output = compensator.push(log.time[i], gyro, temperature);
     result.ready.push_back(output.ready ? 1 : 0);
     result.compensated.emplace_back(output.compensated.begin(), output.compensated.end());
@@ -210,6 +228,9 @@ void expect_matches(const DriftModel& model, const ChamberLog& log, bool single_
   ASSERT_GT(cpp.drift_scale, 0.1);
   const double difference = largest_relative_difference(c, cpp);
   EXPECT_LE(difference, tolerance) << (single_precision ? "float" : "double");
+  // The size export prints (and writes in the header's comment) is the compiled struct's.
+  const double estimated = static_cast<double>(exported_state_bytes(model, options));
+  EXPECT_NEAR(estimated / static_cast<double>(c.state_bytes), 1.0, 0.05) << c.state_bytes;
   std::printf("[ info ] %s %s: largest |C - C++| / drift scale (%.3g deg/h) = %.3g\n",
               model.axes.front().kind.c_str(), single_precision ? "float" : "double", cpp.drift_scale,
               difference);
@@ -258,6 +279,26 @@ TEST_F(CExport, ThermalLagTermsMatchCompensatorThroughAGap) {
   expect_matches(linear, cut, true, 1e-4);
   expect_matches(svr, cut, false, 1e-9);
   expect_matches(svr, cut, true, 1e-4);
+}
+
+// grad:A-B and gradrate:A-B on the chamber air as an extra channel (and on another axis'
+// channel), in products too, through a gap: each channel is smoothed in C as in C++.
+TEST_F(CExport, ChannelGradientTermsMatchCompensatorThroughAGap) {
+  const ChamberLog log = with_chamber_channel(*log_);
+  const std::vector<std::string> terms = {"dT", "lag:420", "grad:1-4", "gradrate:1-4", "grad:2-3*dT"};
+  const DriftModel linear = fitted_model(log, "linear", terms);
+  ASSERT_EQ(linear.extra_temperature_columns, (std::vector<std::string>{"temp_chamber"}));
+  const DriftModel svr = fitted_model(log, "svr", {"lag:420", "grad:1-4", "gradrate:1-4"});
+  const ChamberLog cut = without_rows(log, 5000, 5600);
+  expect_matches(linear, cut, false, 1e-9);
+  expect_matches(linear, cut, true, 1e-4);
+  expect_matches(svr, cut, false, 1e-9);
+  // The chamber air moves without lag, so its rate in float carries the rounding of a
+  // 40 °C mean over a 100 s span (~1e-4 °C/min), which the SVR's kernel scales up:
+  // measured 1.7e-4 of the drift scale, 0.001 °/h, a twentieth of the noise floor's RMS.
+  expect_matches(svr, cut, true, 5e-4);
+  const std::string header = export_c_header(linear, {});
+  EXPECT_NE(header.find("#define THERMODRIFT_TEMPERATURES 4"), std::string::npos);
 }
 
 TEST_F(CExport, WarmUpAndGapRestartLikeTheCompensator) {

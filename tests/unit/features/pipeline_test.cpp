@@ -59,6 +59,34 @@ TEST(FeatureStream, RateOfALinearRampIsItsSlopeInDegreesPerMinute) {
   EXPECT_EQ(ready, 400u - 60u);  // ready from 30 s = smooth + span on
 }
 
+// grad:A-B reads two other channels through their own trailing means and rate spans:
+// two ramps of different slopes and offsets give a difference of their trailing means
+// (each lags its ramp by the same 4.75 s) and a difference of their slopes.
+TEST(FeatureStream, ChannelGradientIsTheDifferenceOfTheSmoothedChannels) {
+  Pipeline pipeline = ramp_pipeline();
+  pipeline.terms = {FeatureTerm::parse("grad:2-3"), FeatureTerm::parse("gradrate:2-3"), FeatureTerm::parse("dT")};
+  EXPECT_EQ(pipeline.channels(), (std::vector<std::size_t>{1, 2}));
+  FeatureStream stream(pipeline);
+  const double dt = 0.5;
+  std::size_t ready = 0;
+  for (int k = 0; k < 400; ++k) {
+    const double t = k * dt;
+    const std::vector<double> channels = {25.0, 10 + 0.05 * t, 12 - 0.02 * t};  // °C/s slopes
+    const auto& sample = stream.push(t, 0.0, channels[0], channels);
+    if (!sample.ready) continue;
+    ++ready;
+    const double lagged = t - 4.75;
+    EXPECT_NEAR(sample.features[0], (10 + 0.05 * lagged) - (12 - 0.02 * lagged), 1e-9) << "t = " << t;
+    EXPECT_NEAR(sample.features[1], (0.05 + 0.02) * 60, 1e-9) << "t = " << t;
+    EXPECT_NEAR(sample.features[2], 0.0, 1e-12);
+  }
+  EXPECT_EQ(ready, 340u);
+  // Fewer channels than the terms read: the stream says which.
+  FeatureStream short_of_channels(pipeline);
+  const std::vector<double> two = {25.0, 10.0};
+  EXPECT_THROW(short_of_channels.push(0, 0, 25.0, two), UsageError);
+}
+
 TEST(FeatureStream, FallingRampGivesNegativeRate) {
   Pipeline pipeline = ramp_pipeline();
   pipeline.terms = {FeatureTerm{FeatureTerm::Kind::rate}};

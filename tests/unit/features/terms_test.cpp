@@ -22,7 +22,8 @@ std::vector<FeatureTerm> parse_all(const std::vector<std::string>& names) {
 
 TEST(FeatureTerms, NamesRoundTrip) {
   for (const std::string name : {"dT", "rate", "lag:600", "lagrate:420", "gradrate:420:240", "dir:900",
-                                 "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3"}) {
+                                 "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3", "grad:1-4",
+                                 "gradrate:12-3", "grad:2-1*lag:600"}) {
     EXPECT_EQ(FeatureTerm::parse(name).name(), name);
   }
   const auto term = FeatureTerm::parse("gradrate:420:240");
@@ -37,7 +38,8 @@ TEST(FeatureTerms, NamesRoundTrip) {
 TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
   for (const std::string bad : {"", "lag", "lag:", "lag:0", "lag:-5", "lag:abc", "lag:1e7", "lag:nan", "lag:300:2",
                                 "gradrate:400", "dir", "dir:1:2:3", "dT^5", "dT^0", "dT^2^2", "dT^", "foo", "dT*",
-                                "x0", "x3^2", "x3*dT", "rate:60"}) {
+                                "x0", "x3^2", "x3*dT", "rate:60", "grad", "grad:1", "grad:1-1", "grad:0-2", "grad:1-65",
+                                "grad:a-b", "grad:1-2-3", "gradrate:1-", "grad:1-2:3", "grad:-1-2", "grad:001-2"}) {
     try {
       FeatureTerm::parse(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -105,6 +107,26 @@ TEST(FeatureTerms, RestartSetsEveryStateInEquilibrium) {
   EXPECT_NEAR(values[3], std::tanh(-0.4 / kDirectionRateScale), 1e-15);
   EXPECT_EQ(values[4], -3.0);
   EXPECT_EQ(values[5], -0.4);
+}
+
+// grad:A-B and gradrate:A-B are differences of the channels' smoothed values and rates,
+// whatever else the sample holds; a channel the inputs lack is a UsageError.
+TEST(FeatureTerms, ChannelGradientsAreDifferencesOfTheChannels) {
+  const auto terms = parse_all({"grad:1-3", "gradrate:3-2", "grad:2-1^2", "dT"});
+  EXPECT_EQ(terms[0].channels(), (std::vector<std::size_t>{0, 2}));
+  EXPECT_EQ(terms[1].factors[0].atom.kind, FeatureAtom::Kind::channel_gradient_rate);
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(terms.size());
+  const std::vector<double> means = {21.5, 20.25, 18.0};
+  const std::vector<double> rates = {0.4, -0.1, 0.7};
+  evaluator.push(TermInputs{3.0, 0.2, 1.0, means, rates}, values);
+  EXPECT_EQ(values[0], 21.5 - 18.0);
+  EXPECT_EQ(values[1], 0.7 - -0.1);
+  EXPECT_EQ(values[2], (20.25 - 21.5) * (20.25 - 21.5));
+  EXPECT_EQ(values[3], 3.0);
+  const std::vector<double> two = {1, 2};
+  EXPECT_THROW(evaluator.push(TermInputs{0, 0, 1, two, two}, values), UsageError);
+  EXPECT_THROW(evaluator.push(0, 0, 1, values), UsageError);
 }
 
 // A product is the product of its atoms' streams, each with its own state.

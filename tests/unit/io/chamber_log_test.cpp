@@ -87,6 +87,25 @@ TEST(ChamberLog, ColumnsByIndexWithHeaderAndDefaultsByPrefix) {
   EXPECT_EQ(defaults.time, (std::vector<double>{0, 1}));
 }
 
+// Found by prefix, three temp* columns for two axes cannot be paired by file order (the
+// first might be the chamber air): a usage error naming them. Named with --temp, the
+// columns after one per axis load as extra channels.
+TEST(ChamberLog, MoreTempColumnsThanAxesMustBeNamed) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "time_s,temp_chamber,temp_a,temp_b,gyro_x,gyro_y\n0,9,1,2,3,4\n1,9,1,2,3,4\n");
+  try {
+    read_chamber_log(path, LogSpec{});
+    ADD_FAILURE() << "three temp* columns for two axes were paired by order";
+  } catch (const UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find("temp_chamber,temp_a,temp_b"), std::string::npos) << error.what();
+  }
+  LogSpec spec;
+  spec.temperature_columns = {"temp_a", "temp_b", "temp_chamber"};
+  const ChamberLog named = read_chamber_log(path, spec);
+  EXPECT_EQ(named.temperature_names, (std::vector<std::string>{"temp_a", "temp_b", "temp_chamber"}));
+  EXPECT_EQ(named.temperature[2][0], 9);
+}
+
 TEST(ChamberLog, RateGivesTimeWithoutATimeColumn) {
   TempDir dir;
   const auto path = dir.write("log.csv", "20,1\n20,2\n20,3\n20,4\n");

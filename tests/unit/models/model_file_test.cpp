@@ -103,6 +103,31 @@ TEST(ModelFile, LogSpecReadsLikeTheTrainingLog) {
   EXPECT_EQ(spec.rate_hz, 50.0);
 }
 
+// A model with grad terms reads its extra temperature columns after the axes' own, and
+// a grad term reading past them is refused on load.
+TEST(ModelFile, ExtraTemperatureColumnsRoundTripAndBoundGradTerms) {
+  TempDir dir;
+  DriftModel model = two_axis_model();
+  model.axes[1].pipeline.terms.push_back(FeatureTerm::parse("grad:2-3"));
+  auto& linear = std::get<LinearModel>(model.axes[1].model);
+  linear.regressors = linear_regressors(3);
+  linear.coefficients = Eigen::Vector3d(0.5, -0.25, 2.0);
+  model.extra_temperature_columns = {"temp_chamber"};
+  EXPECT_EQ(model.temperature_inputs(), 3u);
+  const auto path = dir.file("model.json");
+  save_drift_model(model, path);
+  const DriftModel back = load_drift_model(path);
+  EXPECT_EQ(back.extra_temperature_columns, (std::vector<std::string>{"temp_chamber"}));
+  EXPECT_EQ(back.log_spec().temperature_columns, (std::vector<std::string>{"1", "1", "temp_chamber"}));
+  EXPECT_EQ(back.axes[1].pipeline.channels(), (std::vector<std::size_t>{1, 2}));
+
+  auto json = nlohmann::json::parse(testing::read_file(path));
+  json.erase("extra_temperature_columns");
+  dir.write("short.json", json.dump());
+  const DataError error = load_error(dir.file("short.json"));
+  EXPECT_TRUE(contains(error.what(), "temperature channel 3")) << error.what();
+}
+
 TEST(ModelFile, SavingOverAnInputIsRefused) {
   TempDir dir;
   const auto data = dir.write("data.csv", "time_s,gyro,temp\n0,1,2\n");

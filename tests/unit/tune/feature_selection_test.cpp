@@ -151,6 +151,31 @@ TEST(FeatureSelection, FindsShupeAndHysteresisTermsOnTheCoilLag) {
   EXPECT_LT(chosen.cv_mse, 1.3 * kSmoothedNoiseVariance) << names;
 }
 
+// A second temperature channel that no term of the first can rebuild (a mount following
+// its own slow cycle) and a drift on the difference of the two: the search offers
+// grad:1-2 and takes it.
+TEST(FeatureSelection, TakesTheGradientToASecondChannelWhenItPays) {
+  ChamberLog log = synthetic_log(600, [](double, double, double) { return 0.0; });
+  log.temperature_names.push_back("temp_mount");
+  log.temperature.emplace_back();
+  std::mt19937_64 random(11);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    const double sensor = log.temperature[0][i];
+    const double mount = 12 + 6 * std::sin(log.time[i] / 4000.0);
+    log.temperature[1].push_back(mount);
+    log.gyro[0][i] = 0.05 * (sensor - 15) + 0.4 * (sensor - mount) + noise(random);
+  }
+  EXPECT_EQ(channel_candidate_terms(log, 0), (std::vector<std::string>{"grad:1-2", "gradrate:1-2"}));
+  const FeatureSelection chosen = select_features({log}, 0, seed_pipeline(), FeatureSelectionOptions{});
+  std::string names;
+  for (const auto& term : chosen.terms) names += term + " ";
+  EXPECT_NE(std::find(chosen.terms.begin(), chosen.terms.end(), "grad:1-2"), chosen.terms.end()) << names;
+  EXPECT_LT(chosen.cv_mse, 1.3 * kSmoothedNoiseVariance) << names;
+  // One channel: nothing to take a gradient to.
+  EXPECT_TRUE(channel_candidate_terms(synthetic_log(600, [](double, double, double) { return 0.0; }), 0).empty());
+}
+
 // judge_by_svr keeps one of the sets the search settled on, records each it judged, and
 // reports the SVR's CV MSE of the one it kept.
 TEST(FeatureSelection, SvrJudgesTheSetsTheSearchSettledOn) {
