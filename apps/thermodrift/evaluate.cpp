@@ -1,6 +1,7 @@
 // thermodrift evaluate: residual metrics of a model on a log it may not have seen.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
 
 #include "commands.hpp"
@@ -16,6 +17,7 @@ namespace {
 struct EvaluateArguments {
   DataOptions data;
   std::string model_file;
+  double settle = 0;
   bool json = false;
 };
 
@@ -27,11 +29,19 @@ int run_evaluate(const EvaluateArguments& args) {
     const auto& file = args.data.files.front();
     metrics.push_back(evaluate_libsvm(model, read_libsvm(file), file));
   } else {
-    metrics = evaluate(model, args.data.read(args.data.spec_for(model)));
+    metrics = evaluate(model, args.data.read(args.data.spec_for(model)), args.settle);
+    double longest = 0;
+    for (const auto& axis : model.axes) longest = std::max(longest, longest_time_constant(axis.pipeline));
+    if (args.settle == 0 && longest > 0) {
+      warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log; if it starts "
+                       "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics",
+                       longest, 3 * longest, 3 * longest));
+    }
   }
   nlohmann::json result = {{"command", "evaluate"},
                            {"model_file", args.model_file},
-                           {"evaluation", "on the given logs (held-out if the model was not fitted on them)"}};
+                           {"evaluation", "on the given logs (held-out if the model was not fitted on them)"},
+                           {"settle_seconds", args.settle}};
   nlohmann::json axes = nlohmann::json::array();
   for (std::size_t a = 0; a < metrics.size(); ++a) {
     nlohmann::json entry = metrics[a].to_json();
@@ -51,6 +61,9 @@ Command add_evaluate(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand("evaluate", "residual metrics of a model on a log");
   app->add_option("--model", args->model_file, "model file written by fit")->required()->check(CLI::ExistingFile);
   args->data.add_to(*app);
+  app->add_option("--settle", args->settle,
+                  "leave the first SECONDS of each log (and after each gap) out of the metrics, while lags settle")
+      ->check(CLI::NonNegativeNumber);
   app->add_flag("--json", args->json, "print one JSON object on stdout");
   return {app, [args] { return run_evaluate(*args); }};
 }

@@ -108,6 +108,32 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
                               pipeline.rate_span_seconds, table.rows(), needed, longest));
 }
 
+// The rows of `table` at least `settle_seconds` after the start of their segment of
+// `log` (its first row, or the first after a gap, where the pipeline restarts).
+FeatureTable settled_rows(const FeatureTable& table, const ChamberLog& log, const Pipeline& pipeline,
+                          double settle_seconds) {
+  std::vector<double> segment_start(log.rows());
+  for (std::size_t r = 0; r < log.rows(); ++r) {
+    const bool restart = r == 0 || log.time[r] - log.time[r - 1] > pipeline.effective_gap_seconds();
+    segment_start[r] = restart ? log.time[r] : segment_start[r - 1];
+  }
+  std::vector<Eigen::Index> kept;
+  for (std::size_t i = 0; i < table.rows(); ++i) {
+    const std::size_t r = table.row[i];
+    if (log.time[r] - segment_start[r] >= settle_seconds) kept.push_back(static_cast<Eigen::Index>(i));
+  }
+  FeatureTable out;
+  out.features = table.features(kept, Eigen::all);
+  out.target = table.target(kept);
+  for (const Eigen::Index i : kept) {
+    const auto k = static_cast<std::size_t>(i);
+    out.time.push_back(table.time[k]);
+    out.temperature.push_back(table.temperature[k]);
+    out.row.push_back(table.row[k]);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
@@ -345,7 +371,8 @@ std::vector<ResidualMetrics> evaluate_from(const DriftModel& model, const Chambe
   return metrics;
 }
 
-std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs) {
+std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs,
+                                      double settle_seconds) {
   std::vector<ResidualMetrics> metrics;
   for (std::size_t axis = 0; axis < model.axes.size(); ++axis) {
     const auto& axis_model = model.axes[axis];
@@ -357,15 +384,26 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
                                     model.axes.size(), log.axes()));
       }
       const auto channel = temperature_channel_per_axis(log).at(axis);
-      append_rows(table, build_feature_table(axis_model.pipeline, log, axis, channel, false));
+      FeatureTable part = build_feature_table(axis_model.pipeline, log, axis, channel, false);
+      if (settle_seconds > 0) part = settled_rows(part, log, axis_model.pipeline, settle_seconds);
+      append_rows(table, part);
     }
     if (table.rows() == 0) {
       throw DataError(logs.front().source, 0, 0,
-                      fmt::format("no usable samples after the {:g} s warm-up", axis_model.pipeline.warm_up_seconds()));
+                      fmt::format("no usable samples after the {:g} s warm-up{}", axis_model.pipeline.warm_up_seconds(),
+                                  settle_seconds > 0 ? fmt::format(" and {:g} s of settling", settle_seconds) : ""));
     }
     metrics.push_back(residual_metrics(table.target, axis_model.predict(table.features)));
   }
   return metrics;
+}
+
+double longest_time_constant(const Pipeline& pipeline) {
+  double longest = 0;
+  for (const auto& term : pipeline.terms) {
+    for (const auto& factor : term.factors) longest = std::max({longest, factor.atom.tau, factor.atom.tau2});
+  }
+  return longest;
 }
 
 }  // namespace thermodrift

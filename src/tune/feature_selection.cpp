@@ -365,21 +365,19 @@ FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_
   // (their time constants and those already chosen move together, since a new term often
   // wants the lag it shares to move), and the best refined one is taken if it pays.
   for (std::size_t step = 0; step < 4 * options.max_terms; ++step) {
-    std::vector<std::pair<double, std::size_t>> ranked;
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      Scored trial{with_block(current.terms, candidates[c]), 0, {}};
+    std::vector<std::pair<double, Scored>> ranked;  // penalized score, the set as it stands
+    for (const auto& candidate : candidates) {
+      Scored trial{with_block(current.terms, candidate), 0, {}};
       if (trial.terms.size() == current.terms.size() || trial.terms.size() > options.max_terms) continue;
       trial.cv = search.cv(trial.terms);
-      ranked.emplace_back(search.penalized(trial), c);
+      ranked.emplace_back(search.penalized(trial), std::move(trial));
     }
     if (ranked.empty()) break;
-    std::stable_sort(ranked.begin(), ranked.end());
+    std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     Scored best;
     const std::size_t refined = std::min(ranked.size(), std::max<std::size_t>(options.refine_top, 1));
     for (std::size_t i = 0; i < refined; ++i) {
-      Scored trial{with_block(current.terms, candidates[ranked[i].second]), 0, {}};
-      trial.cv = search.cv(trial.terms);
-      trial = search.refine(std::move(trial), options.refine_budget);
+      Scored trial = search.refine(std::move(ranked[i].second), options.refine_budget);
       if (search.penalized(trial) < search.penalized(best)) best = std::move(trial);
     }
     if (!(search.penalized(best) < search.penalized(current))) break;

@@ -412,8 +412,20 @@ TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
 
   const auto evaluated = thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --json");
   ASSERT_EQ(evaluated.status, 0) << evaluated.err;
-  for (const auto& axis : nlohmann::json::parse(evaluated.out)["axes"]) {
+  const auto all_axes = nlohmann::json::parse(evaluated.out)["axes"];
+  for (const auto& axis : all_axes) {
     EXPECT_LT(axis.at("mse_after").get<double>(), axis.at("mse_before").get<double>()) << axis.dump();
+  }
+  // Its lag starts in equilibrium on a log begun mid-transient: evaluate says so, and
+  // --settle leaves the first 1800 s out (1600 samples at 1 Hz after the 200 s warm-up).
+  EXPECT_TRUE(contains(evaluated.err, "--settle 1800")) << evaluated.err;
+  const auto settled = thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --settle 1800 --json");
+  ASSERT_EQ(settled.status, 0) << settled.err;
+  EXPECT_EQ(settled.err, "");
+  const auto settled_json = nlohmann::json::parse(settled.out);
+  EXPECT_EQ(settled_json["settle_seconds"], 1800.0);
+  for (std::size_t a = 0; a < 3; ++a) {
+    EXPECT_EQ(settled_json["axes"][a]["samples"].get<std::size_t>() + 1600, all_axes[a]["samples"].get<std::size_t>());
   }
   const auto compensated = thermodrift(dir_, "compensate --model grad.json --data cycle2.csv --out out.csv");
   ASSERT_EQ(compensated.status, 0) << compensated.err;
