@@ -81,6 +81,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   ProgressPrinter progress("thermodrift fit");
   std::size_t axis_count = 1;
   options.tuning_progress = [&](std::size_t axis, const optim::Progress& p) { return progress.tuning(axis, axis_count, p); };
+  options.selection_progress = [&](std::size_t axis, const std::string& what) { progress.step(axis, axis_count, what); };
   Calibration calibration;
   if (args.data.format == "libsvm") {
     if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
@@ -104,6 +105,12 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     entry["evaluations"] = axis.fit.value("evaluations", 1);
     entry["seconds"] = calibration.axes[a].seconds;
     entry["training_samples"] = calibration.axes[a].training_samples;
+    entry["terms"] = axis.pipeline.term_names();
+    if (axis.fit.contains("feature_selection")) {
+      const auto& selection = axis.fit["feature_selection"];
+      entry["feature_selection"] = {{"scored_by", selection["scored_by"]}, {"cv_mse", selection["cv_mse"]},
+                                    {"steps", selection["path"].size()}};
+    }
     if (axis.fit.contains("tuning")) {
       const auto& tuning = axis.fit["tuning"];
       entry["tuning"] = {{"method", tuning["method"]}, {"objective", tuning["objective"]},

@@ -21,6 +21,12 @@ void print_axes(const nlohmann::json& result, bool as_json, const std::string& t
                axis.at("mse_after").get<double>(), axis.at("residual_std").get<double>(),
                axis.at("residual_peak_to_peak").get<double>());
   }
+  for (const auto& axis : result.at("axes")) {
+    if (!axis.contains("terms")) continue;
+    std::string terms;
+    for (const auto& term : axis["terms"]) terms += (terms.empty() ? "" : ", ") + term.get<std::string>();
+    fmt::print("{} terms: {}\n", axis.at("name").get<std::string>(), terms);
+  }
 }
 
 }  // namespace thermodrift::cli

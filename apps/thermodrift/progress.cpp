@@ -37,4 +37,10 @@ bool ProgressPrinter::tuning(std::size_t axis, std::size_t axes, const optim::Pr
   return true;
 }
 
+void ProgressPrinter::step(std::size_t axis, std::size_t axes, const std::string& what) {
+  if (drawn_) std::fputc('\n', stderr);
+  drawn_ = false;
+  fmt::print(stderr, "{}: axis {}/{}: {}\n", what_, axis + 1, axes, what);
+}
+
 }  // namespace thermodrift::cli

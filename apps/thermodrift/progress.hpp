@@ -18,6 +18,8 @@ class ProgressPrinter {
   // Shows the tuning of axis `axis` of `axes`; returns false once Ctrl-C was pressed,
   // which stops the optimizer.
   bool tuning(std::size_t axis, std::size_t axes, const optim::Progress& progress);
+  // One line of a step outside tuning ("choosing feature terms"), ending a bar first.
+  void step(std::size_t axis, std::size_t axes, const std::string& what);
 
  private:
   std::string what_;
