@@ -134,6 +134,16 @@ FeatureTable settled_rows(const FeatureTable& table, const ChamberLog& log, cons
   return out;
 }
 
+// The least-squares search of one axis, after the same check of the data a fit makes
+// (too short a log says so in terms of the warm-up, not of folds).
+FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
+                                 const CalibrationOptions& calibration) {
+  const FeatureSelectionOptions options;  // its own folds, not the tuning's
+  require_samples(feature_table(logs, pipeline, axis, true), pipeline, logs, 4 * static_cast<std::size_t>(options.folds));
+  if (calibration.selection_progress) calibration.selection_progress(axis, "choosing feature terms");
+  return select_features(logs, axis, pipeline, options);
+}
+
 }  // namespace
 
 std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
@@ -141,8 +151,7 @@ std::vector<FeatureSelection> select_features_per_axis(const std::vector<Chamber
   if (logs.empty()) throw UsageError("no log to choose features on");
   std::vector<FeatureSelection> selections;
   for (std::size_t axis = 0; axis < logs.front().axes(); ++axis) {
-    if (options.selection_progress) options.selection_progress(axis, "choosing feature terms");
-    selections.push_back(select_features(logs, axis, make_pipeline(logs, axis, options), FeatureSelectionOptions{}));
+    selections.push_back(search_features(logs, axis, make_pipeline(logs, axis, options), options));
   }
   return selections;
 }
@@ -302,11 +311,10 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     axis_model.kind = options.model;
     nlohmann::json selection_json;
     if (chooses_features(options)) {
-      const FeatureSelectionOptions selection_options;  // its own folds, not the tuning's
-      const bool searched = axis < options.selections.size();
-      if (!searched && options.selection_progress) options.selection_progress(axis, "choosing feature terms");
-      FeatureSelection selection = searched ? options.selections[axis]
-                                            : select_features(logs, axis, axis_model.pipeline, selection_options);
+      const FeatureSelectionOptions selection_options;
+      FeatureSelection selection = axis < options.selections.size()
+                                       ? options.selections[axis]
+                                       : search_features(logs, axis, axis_model.pipeline, options);
       if (options.model == "svr") {
         if (options.selection_progress) options.selection_progress(axis, "judging the chosen terms by SVR");
         SvrJudgeOptions judge;

@@ -238,11 +238,13 @@ TEST(CliErrors, EmptyFileAndOnlyHeaderAreExit3) {
 TEST(CliErrors, FewerRowsThanTheWarmUpIsExit3) {
   TempDir dir;
   dir.write("short.csv", small_log(50));  // 50 s of data, 100 s smoothing
-  const auto result = thermodrift(dir, "fit --data short.csv --gyro gyro_x --temp temp --out m.json");
-  EXPECT_EQ(result.status, 3) << result.err;
-  expect_one_line(result);
-  EXPECT_TRUE(contains(result.err, "short.csv: too little data")) << result.err;
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"short.csv"});
+  for (const std::string features : {"", " --model svr --features auto"}) {
+    const auto result = thermodrift(dir, "fit --data short.csv --gyro gyro_x --temp temp --out m.json" + features);
+    EXPECT_EQ(result.status, 3) << features << ": " << result.err;
+    expect_one_line(result);
+    EXPECT_TRUE(contains(result.err, "short.csv: too little data after the 200 s warm-up")) << result.err;
+    EXPECT_EQ(dir.entries(), std::vector<std::string>{"short.csv"});
+  }
 }
 
 TEST(CliErrors, ConstantTemperatureFitsWithFiniteNumbers) {
