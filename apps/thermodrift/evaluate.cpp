@@ -31,7 +31,7 @@ int run_evaluate(const EvaluateArguments& args) {
   } else {
     metrics = evaluate(model, args.data.read(args.data.spec_for(model)), args.settle);
     double longest = 0;
-    for (const auto& axis : model.axes) longest = std::max(longest, longest_time_constant(axis.pipeline));
+    for (const auto& axis : model.axes) longest = std::max(longest, axis.pipeline.longest_time_constant());
     if (args.settle == 0 && longest > 0) {
       warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log; if it starts "
                        "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics",

@@ -30,6 +30,14 @@ std::vector<std::size_t> Pipeline::channels() const {
   return out;
 }
 
+double Pipeline::longest_time_constant() const {
+  double longest = 0;
+  for (const auto& term : terms) {
+    for (const auto& factor : term.factors) longest = std::max({longest, factor.atom.tau, factor.atom.tau2});
+  }
+  return longest;
+}
+
 void Pipeline::validate() const {
   auto finite_nonnegative = [](double value) { return std::isfinite(value) && value >= 0; };
   if (!finite_nonnegative(smooth_seconds)) {
@@ -171,7 +179,8 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
   }
   terms_.push({own.mean - pipeline_->reference_temperature, own.rate, step_seconds, channel_means_, channel_rates_},
               features_);
-  sample_.ready = time - start_time_ >= pipeline_->warm_up_seconds();
+  sample_.since_start = time - start_time_;
+  sample_.ready = sample_.since_start >= pipeline_->warm_up_seconds();
   return sample_;
 }
 
@@ -197,6 +206,7 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
     flat.insert(flat.end(), sample.features.begin(), sample.features.end());
     target.push_back(sample.smoothed_gyro);
     table.time.push_back(log.time[i]);
+    table.since_start.push_back(sample.since_start);
     table.temperature.push_back(sample.smoothed_temperature);
     table.row.push_back(i);
   }
@@ -219,6 +229,7 @@ void append_rows(FeatureTable& table, const FeatureTable& more) {
   table.target.conservativeResize(n + more.target.size());
   table.target.tail(more.target.size()) = more.target;
   table.time.insert(table.time.end(), more.time.begin(), more.time.end());
+  table.since_start.insert(table.since_start.end(), more.since_start.begin(), more.since_start.end());
   table.temperature.insert(table.temperature.end(), more.temperature.begin(), more.temperature.end());
   table.row.insert(table.row.end(), more.row.begin(), more.row.end());
 }

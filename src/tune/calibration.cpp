@@ -32,7 +32,7 @@ std::vector<std::string> extra_temperature_columns(const std::vector<ChamberLog>
     for (const std::size_t channel : pipeline.channels()) used = std::max(used, channel + 1);
   }
   if (used == 0) return {};
-  if (log.temperature.size() < log.axes() || (log.temperature.size() == 1 && log.axes() > 1)) {
+  if (log.temperature.size() < log.axes()) {
     throw UsageError(fmt::format("grad terms need one temperature column per axis (then any others) with "
                                  "--temp; {} has {} for {} axes",
                                  log.source, log.temperature.size(), log.axes()));
@@ -108,19 +108,11 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
                               pipeline.rate_span_seconds, table.rows(), needed, longest));
 }
 
-// The rows of `table` at least `settle_seconds` after the start of their segment of
-// `log` (its first row, or the first after a gap, where the pipeline restarts).
-FeatureTable settled_rows(const FeatureTable& table, const ChamberLog& log, const Pipeline& pipeline,
-                          double settle_seconds) {
-  std::vector<double> segment_start(log.rows());
-  for (std::size_t r = 0; r < log.rows(); ++r) {
-    const bool restart = r == 0 || log.time[r] - log.time[r - 1] > pipeline.effective_gap_seconds();
-    segment_start[r] = restart ? log.time[r] : segment_start[r - 1];
-  }
+// The rows of `table` at least `settle_seconds` after the pipeline's (re)start.
+FeatureTable settled_rows(const FeatureTable& table, double settle_seconds) {
   std::vector<Eigen::Index> kept;
   for (std::size_t i = 0; i < table.rows(); ++i) {
-    const std::size_t r = table.row[i];
-    if (log.time[r] - segment_start[r] >= settle_seconds) kept.push_back(static_cast<Eigen::Index>(i));
+    if (table.since_start[i] >= settle_seconds) kept.push_back(static_cast<Eigen::Index>(i));
   }
   FeatureTable out;
   out.features = table.features(kept, Eigen::all);
@@ -128,6 +120,7 @@ FeatureTable settled_rows(const FeatureTable& table, const ChamberLog& log, cons
   for (const Eigen::Index i : kept) {
     const auto k = static_cast<std::size_t>(i);
     out.time.push_back(table.time[k]);
+    out.since_start.push_back(table.since_start[k]);
     out.temperature.push_back(table.temperature[k]);
     out.row.push_back(table.row[k]);
   }
@@ -393,7 +386,7 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
       }
       const auto channel = temperature_channel_per_axis(log).at(axis);
       FeatureTable part = build_feature_table(axis_model.pipeline, log, axis, channel, false);
-      if (settle_seconds > 0) part = settled_rows(part, log, axis_model.pipeline, settle_seconds);
+      if (settle_seconds > 0) part = settled_rows(part, settle_seconds);
       append_rows(table, part);
     }
     if (table.rows() == 0) {
@@ -404,14 +397,6 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
     metrics.push_back(residual_metrics(table.target, axis_model.predict(table.features)));
   }
   return metrics;
-}
-
-double longest_time_constant(const Pipeline& pipeline) {
-  double longest = 0;
-  for (const auto& term : pipeline.terms) {
-    for (const auto& factor : term.factors) longest = std::max({longest, factor.atom.tau, factor.atom.tau2});
-  }
-  return longest;
 }
 
 }  // namespace thermodrift

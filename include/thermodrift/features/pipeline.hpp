@@ -39,6 +39,8 @@ struct Pipeline {
   std::vector<std::string> term_names() const;
   // The temperature channels (0-based, sorted, distinct) its grad terms read.
   std::vector<std::size_t> channels() const;
+  // The longest time constant of its terms, s (0 for the seed's pair).
+  double longest_time_constant() const;
   void validate() const;  // UsageError on nonsense (negative window, no terms, ...)
 
   nlohmann::json to_json() const;
@@ -80,6 +82,7 @@ class FeatureStream {
 
   struct Sample {
     bool ready = false;           // false during warm-up (after the start or a gap)
+    double since_start = 0;       // s since the stream (re)started: lags settle over this
     double smoothed_gyro = 0;     // °/h, the drift target
     double smoothed_temperature = 0;
     std::span<const double> features;  // one value per pipeline term
@@ -112,6 +115,7 @@ struct FeatureTable {
   Eigen::MatrixXd features;       // one row per sample, one column per term
   Eigen::VectorXd target;         // smoothed gyro, °/h
   std::vector<double> time;       // s
+  std::vector<double> since_start;  // s since the pipeline (re)started: the log's start or a gap
   std::vector<double> temperature;  // smoothed, °C
   std::vector<std::size_t> row;   // index of the log row
   std::size_t rows() const { return row.size(); }

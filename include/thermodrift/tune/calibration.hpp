@@ -101,8 +101,6 @@ FeatureTable feature_table(const std::vector<ChamberLog>& logs, const Pipeline& 
 // the lags start there in equilibrium, which a log begun mid-transient is not.
 std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                       double settle_seconds = 0);
-// The longest time constant of a pipeline's terms, s (0 for the seed's pair).
-double longest_time_constant(const Pipeline& pipeline);
 // Metrics on the rows of `log` from `first_row` on, the features streamed from its first
 // row: the held-out part of one continuous log, with filters and lags carried into it
 // as a running compensator carries them (they see temperatures only, never the gyro).

@@ -115,13 +115,16 @@ TEST(FeatureStream, GapLongerThanTheThresholdRestartsWarmUp) {
   for (int k = 0; k <= 40; ++k) stream.push(k, 0, 20);
   // A 4 s step is within the threshold: still ready.
   EXPECT_TRUE(stream.push(44, 0, 20).ready);
-  // A 6 s step is a gap: warm-up again from t = 50, and the old samples are forgotten.
-  const auto& after_gap = stream.push(50, 1, 90);
+  EXPECT_EQ(stream.push(45, 0, 20).since_start, 45.0);
+  // A 6 s step is a gap: warm-up again from t = 51, and the old samples are forgotten.
+  const auto& after_gap = stream.push(51, 1, 90);
+  EXPECT_EQ(after_gap.since_start, 0.0);
   EXPECT_FALSE(after_gap.ready);
   EXPECT_EQ(after_gap.smoothed_temperature, 90.0);
   EXPECT_EQ(after_gap.smoothed_gyro, 1.0);
-  for (int t = 51; t < 80; ++t) EXPECT_FALSE(stream.push(t, 1, 90).ready) << t;
-  const auto& ready_again = stream.push(80, 1, 90);
+  for (int t = 52; t < 81; ++t) EXPECT_FALSE(stream.push(t, 1, 90).ready) << t;
+  const auto& ready_again = stream.push(81, 1, 90);
+  EXPECT_EQ(ready_again.since_start, 30.0);
   EXPECT_TRUE(ready_again.ready);
   EXPECT_NEAR(ready_again.features[1], 0.0, 1e-12);  // no rate across the gap
 }
