@@ -33,7 +33,7 @@ std::vector<std::size_t> Pipeline::channels() const {
 double Pipeline::longest_time_constant() const {
   double longest = 0;
   for (const auto& term : terms) {
-    for (const auto& factor : term.factors) longest = std::max({longest, factor.atom.tau, factor.atom.tau2});
+    for (const double tau : term.time_constants()) longest = std::max(longest, tau);
   }
   return longest;
 }

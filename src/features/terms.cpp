@@ -160,6 +160,15 @@ bool FeatureTerm::uses_input() const {
   return false;
 }
 
+std::vector<double> FeatureTerm::time_constants() const {
+  std::vector<double> out;
+  for (const auto& factor : factors) {
+    if (factor.atom.tau > 0) out.push_back(factor.atom.tau);
+    if (factor.atom.tau2 > 0) out.push_back(factor.atom.tau2);
+  }
+  return out;
+}
+
 std::vector<std::size_t> FeatureTerm::channels() const {
   std::vector<std::size_t> out;
   for (const auto& factor : factors) {

@@ -96,16 +96,6 @@ double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int 
   return squared_error / static_cast<double>(n);
 }
 
-// The time constants of a term's atoms.
-std::vector<double> time_constants(const FeatureTerm& term) {
-  std::vector<double> out;
-  for (const auto& factor : term.factors) {
-    if (factor.atom.tau > 0) out.push_back(factor.atom.tau);
-    if (factor.atom.tau2 > 0) out.push_back(factor.atom.tau2);
-  }
-  return out;
-}
-
 // `terms` with every time constant equal to `from` set to `to`.
 std::vector<std::string> with_time_constant(const std::vector<std::string>& terms, double from, double to) {
   std::vector<std::string> out;
@@ -268,7 +258,7 @@ class Search {
   static std::set<double> constants(const Terms& terms) {
     std::set<double> out;
     for (const auto& name : terms) {
-      for (const double tau : time_constants(FeatureTerm::parse(name))) out.insert(tau);
+      for (const double tau : FeatureTerm::parse(name).time_constants()) out.insert(tau);
     }
     return out;
   }

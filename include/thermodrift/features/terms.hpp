@@ -73,6 +73,8 @@ struct FeatureTerm {
   // The kind of a plain atom (one factor, power 1); Kind::input also for libsvm columns.
   bool is_atom(Kind kind) const { return factors.size() == 1 && factors[0].power == 1 && factors[0].atom.kind == kind; }
   bool uses_input() const;
+  // The time constants (s) of its atoms, in order, with repeats.
+  std::vector<double> time_constants() const;
   // The temperature channels (0-based) its grad atoms read, in order, with repeats.
   std::vector<std::size_t> channels() const;
   bool operator==(const FeatureTerm&) const = default;
