@@ -1,11 +1,14 @@
 // thermodrift simulate: a 3-axis FOG chamber test with known true drift (docs/simulator.md).
 #include <fmt/format.h>
 
+#include <cstdint>
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
+#include "thermodrift/sim/law_family.hpp"
 #include "thermodrift/sim/simulator.hpp"
 
 namespace thermodrift::cli {
@@ -15,12 +18,24 @@ namespace {
 struct SimulateArguments {
   sim::SimulatorOptions options;
   std::string out;
+  std::optional<std::uint64_t> law;  // a unit of the law family instead of the default unit
+  std::string profile = "cycle";
+  std::optional<std::uint64_t> profile_seed;
+  bool describe = false;
 };
+
+sim::ChamberRun simulate_law(const SimulateArguments& args) {
+  const sim::UnitLaw unit = sim::draw_unit(*args.law);
+  const sim::Setpoint setpoint = sim::draw_profile(sim::parse_profile_kind(args.profile), unit,
+                                                   args.profile_seed.value_or(*args.law), args.options.cycles);
+  if (args.describe) fmt::print(stderr, "{}", unit.describe());
+  return sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz);
+}
 
 int run_simulate(const SimulateArguments& args) {
   std::string why;
   if (!args.options.IsValid(&why)) throw UsageError(why);
-  const sim::ChamberRun run = sim::simulate(args.options);
+  const sim::ChamberRun run = args.law ? simulate_law(args) : sim::simulate(args.options);
   AtomicFile out(args.out);
   sim::write_csv(run, out.stream());
   out.commit();
@@ -45,6 +60,12 @@ Command add_simulate(CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   app->add_option("--soak", args->options.extreme_soak_min, "soak at each extreme, minutes")
       ->check(CLI::NonNegativeNumber);
+  app->add_option("--law", args->law,
+                  "draw the unit from the law family with this seed (thermal network, drift law, noise; "
+                  "docs/simulator.md) instead of the default unit");
+  app->add_option("--profile", args->profile, "with --law: cycle, slow, fast, staircase, partial or wander");
+  app->add_option("--profile-seed", args->profile_seed, "with --law: seed of the programme (default: the law's)");
+  app->add_flag("--describe", args->describe, "with --law: print the drawn unit's law on stderr");
   app->add_flag("--internal-states", args->options.record_internal_states,
                 "also write the coil temperature, gradient and hysteresis state of each axis");
   return {app, [args] { return run_simulate(*args); }};

@@ -1,0 +1,521 @@
+#include "thermodrift/sim/law_family.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "thermodrift/error.hpp"
+#include "thermodrift/sim/standard_normal.hpp"
+
+namespace thermodrift::sim {
+
+std::vector<std::uint64_t> development_law_seeds() {
+  std::vector<std::uint64_t> seeds;
+  for (std::uint64_t s = 1; s <= 40; ++s) seeds.push_back(s);
+  return seeds;
+}
+
+std::vector<std::uint64_t> acceptance_law_seeds() {
+  std::vector<std::uint64_t> seeds;
+  for (std::uint64_t s = 9001; s <= 9060; ++s) seeds.push_back(s);
+  return seeds;
+}
+
+namespace {
+
+// Draws from the engine's raw output (reproducible across standard libraries, as
+// StandardNormal is).
+class Draw {
+ public:
+  explicit Draw(std::uint64_t seed) : engine_(seed) {}
+  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
+  double uniform(double low, double high) { return low + (high - low) * uniform(); }
+  double log_uniform(double low, double high) { return std::exp(uniform(std::log(low), std::log(high))); }
+  bool chance(double p) { return uniform() < p; }
+  double sign() { return chance(0.5) ? 1.0 : -1.0; }
+  double signed_uniform(double low, double high) { return sign() * uniform(low, high); }
+  int integer(int low, int high) {  // inclusive
+    return low + static_cast<int>(std::floor(uniform() * (high - low + 1)));
+  }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+AxisLaw draw_axis(Draw& draw, int axis, const UnitLaw& unit) {
+  AxisLaw law;
+  const int nodes = draw.integer(1, 3);
+  for (int k = 0; k < nodes; ++k) law.node_time_constants_s.push_back(draw.log_uniform(50, 2500));
+  if (draw.chance(0.5)) law.back_coupling = draw.uniform(0.05, 0.5);
+  if (draw.chance(0.5)) law.self_heating_c = draw.uniform(0.5, 3.0);
+  const double site = draw.uniform();
+  law.sensor_axis = axis;
+  if (site < 0.25) {
+    law.sensor_node = -1;  // the case
+  } else if (site < 0.75) {
+    law.sensor_node = draw.integer(0, nodes - 1);
+  } else {
+    law.sensor_axis = (axis + draw.integer(1, 2)) % 3;
+    law.sensor_node = -2;  // resolved once every chain exists
+  }
+  law.sensor_time_constant_s = draw.log_uniform(2, 60);
+
+  law.bias_dph = draw.uniform(-1.0, 1.0);
+  if (draw.chance(0.6)) {
+    law.shape = StaticShape::polynomial;
+    law.polynomial = {draw.signed_uniform(0.005, 0.05), draw.signed_uniform(0.0, 8e-4),
+                      draw.chance(0.5) ? draw.signed_uniform(0.0, 1.5e-5) : 0.0};
+  } else {
+    law.shape = StaticShape::tanh_step;
+    law.polynomial = {draw.signed_uniform(0.0, 0.03), 0.0, 0.0};
+    law.step_dph = draw.signed_uniform(0.3, 1.5);
+    law.step_centre_c = draw.uniform(unit.min_c + 20, unit.max_c - 20);
+    law.step_width_c = draw.uniform(8, 30);
+  }
+  law.rate_dph = draw.signed_uniform(0.2, 2.5);
+  if (draw.chance(0.5)) law.axial_gradient_dph = draw.signed_uniform(0.02, 0.2);
+  if (draw.chance(0.5)) law.axial_gradient_rate_dph = draw.signed_uniform(0.5, 3.0);
+  if (draw.chance(0.7)) {
+    law.radial_gain_s = draw.log_uniform(20, 150);
+    law.radial_time_constant_s = draw.log_uniform(60, 600);
+    law.radial_gradient_rate_dph = draw.signed_uniform(0.5, 4.0);
+  }
+  const double hysteresis = draw.uniform();
+  if (hysteresis < 0.45) {
+    law.hysteresis = HysteresisKind::memory;
+    law.hysteresis_time_constant_s = draw.log_uniform(200, 3000);
+    law.hysteresis_rate_scale = draw.log_uniform(0.05, 0.5);
+  } else if (hysteresis < 0.75) {
+    law.hysteresis = HysteresisKind::play;
+    law.hysteresis_width_c = draw.uniform(0.5, 5.0);
+  }
+  if (law.hysteresis != HysteresisKind::none) law.hysteresis_dph = draw.signed_uniform(0.05, 0.5);
+  if (draw.chance(0.5)) {
+    law.turn_on_dph = draw.signed_uniform(0.05, 0.5);
+    law.turn_on_time_constant_s = draw.log_uniform(150, 900);
+  }
+  return law;
+}
+
+}  // namespace
+
+UnitLaw draw_unit(std::uint64_t law_seed) {
+  Draw draw(derive_seed(law_seed, 0x1a3));
+  UnitLaw unit;
+  unit.seed = law_seed;
+  unit.min_c = draw.uniform(-45, -25);
+  unit.max_c = draw.uniform(50, 70);
+  unit.reference_c = draw.uniform(15, 25);
+  unit.case_time_constant_s = draw.log_uniform(50, 800);
+  if (draw.chance(0.6)) unit.case_self_heating_c = draw.uniform(0.5, 5.0);
+  for (int a = 0; a < 3; ++a) unit.axes[static_cast<std::size_t>(a)] = draw_axis(draw, a, unit);
+  for (auto& axis : unit.axes) {
+    if (axis.sensor_node == -2) {
+      const auto other = unit.axes[static_cast<std::size_t>(axis.sensor_axis)].node_time_constants_s.size();
+      axis.sensor_node = draw.integer(0, static_cast<int>(other) - 1);
+    }
+  }
+  LawNoise& noise = unit.noise;
+  noise.angle_random_walk = draw.log_uniform(0.0015, 0.008);
+  noise.bias_instability = draw.log_uniform(0.004, 0.02);
+  noise.flicker = draw.chance(0.5);
+  noise.bias_correlation_time_s = draw.log_uniform(100, 3000);
+  noise.quantization_arcsec = draw.chance(0.3) ? 0.0 : draw.uniform(0.01, 0.1);
+  noise.temperature_noise_c = draw.log_uniform(0.001, 0.02);
+  static constexpr std::array<double, 4> resolutions = {0.0001, 0.001, 0.01, 0.0625};
+  noise.temperature_resolution_c = resolutions[static_cast<std::size_t>(draw.integer(0, 3))];
+  return unit;
+}
+
+std::string UnitLaw::describe() const {
+  std::string text = fmt::format("law {}: range {:.0f}..{:.0f} °C, case τ {:.0f} s (+{:.1f} °C powered); noise ARW {:.4f} °/√h, "
+                                 "BI {:.4f} °/h {}, temp noise {:.3f} °C res {:g} °C\n",
+                                 seed, min_c, max_c, case_time_constant_s, case_self_heating_c, noise.angle_random_walk,
+                                 noise.bias_instability, noise.flicker ? "flicker" : "Gauss-Markov",
+                                 noise.temperature_noise_c, noise.temperature_resolution_c);
+  static constexpr std::array<const char*, 3> names = {"x", "y", "z"};
+  static constexpr std::array<const char*, 3> hysteresis_names = {"none", "memory", "play"};
+  for (std::size_t a = 0; a < 3; ++a) {
+    const AxisLaw& axis = axes[a];
+    std::string chain;
+    for (double tau : axis.node_time_constants_s) chain += fmt::format("{}{:.0f}", chain.empty() ? "" : "→", tau);
+    text += fmt::format("  {}: chain {} s (back {:.2f}, +{:.1f} °C), sensor on {}{} (τ {:.0f} s); {} a=({:.3g},{:.3g},{:.3g}) "
+                        "step {:.2f}; rate {:.2f}; axial {:.3f}/{:.2f}; radial {:.2f} (G {:.0f} s, τ {:.0f} s); "
+                        "hysteresis {} {:.2f}; turn-on {:.2f} ({:.0f} s)\n",
+                        names[a], chain, axis.back_coupling, axis.self_heating_c,
+                        axis.sensor_node < 0 ? "case" : fmt::format("{} node {}", names[static_cast<std::size_t>(axis.sensor_axis)], axis.sensor_node + 1),
+                        "", axis.sensor_time_constant_s, axis.shape == StaticShape::polynomial ? "poly" : "tanh",
+                        axis.polynomial[0], axis.polynomial[1], axis.polynomial[2], axis.step_dph, axis.rate_dph,
+                        axis.axial_gradient_dph, axis.axial_gradient_rate_dph, axis.radial_gradient_rate_dph,
+                        axis.radial_gain_s, axis.radial_time_constant_s,
+                        hysteresis_names[static_cast<std::size_t>(axis.hysteresis)], axis.hysteresis_dph,
+                        axis.turn_on_dph, axis.turn_on_time_constant_s);
+  }
+  return text;
+}
+
+// ---------------------------------------------------------------- profiles
+
+double Setpoint::temperature(double t) const {
+  double value = 0;
+  if (time_s.empty()) return value;
+  if (t <= time_s.front()) {
+    value = temperature_c.front();
+  } else if (t >= time_s.back()) {
+    value = temperature_c.back();
+  } else {
+    const auto upper = std::upper_bound(time_s.begin(), time_s.end(), t);
+    const auto k = static_cast<std::size_t>(upper - time_s.begin());
+    const double fraction = (t - time_s[k - 1]) / (time_s[k] - time_s[k - 1]);
+    value = temperature_c[k - 1] + fraction * (temperature_c[k] - temperature_c[k - 1]);
+  }
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (wander_amplitude_c[i] == 0) continue;
+    // Sines that start at zero, so the programme starts at its first knot.
+    const double phase = 2 * std::numbers::pi * t / wander_period_s[i] + wander_phase[i];
+    value += wander_amplitude_c[i] * (std::sin(phase) - std::sin(wander_phase[i]));
+  }
+  return value;
+}
+
+std::string to_string(ProfileKind kind) {
+  switch (kind) {
+    case ProfileKind::cycle: return "cycle";
+    case ProfileKind::slow: return "slow";
+    case ProfileKind::fast: return "fast";
+    case ProfileKind::staircase: return "staircase";
+    case ProfileKind::partial: return "partial";
+    case ProfileKind::wander: return "wander";
+  }
+  return "cycle";
+}
+
+ProfileKind parse_profile_kind(const std::string& text) {
+  for (ProfileKind kind : {ProfileKind::cycle, ProfileKind::slow, ProfileKind::fast, ProfileKind::staircase,
+                           ProfileKind::partial, ProfileKind::wander}) {
+    if (to_string(kind) == text) return kind;
+  }
+  throw UsageError(fmt::format("unknown profile '{}' (expected cycle, slow, fast, staircase, partial or wander)", text));
+}
+
+namespace {
+
+class ProgrammeBuilder {
+ public:
+  explicit ProgrammeBuilder(double start_c) {
+    setpoint_.time_s.push_back(0);
+    setpoint_.temperature_c.push_back(start_c);
+  }
+  double now_c() const { return setpoint_.temperature_c.back(); }
+  void ramp(double target_c, double rate_c_per_min) {
+    const double duration = std::abs(target_c - now_c()) / rate_c_per_min * 60.0;
+    if (duration <= 0) return;
+    add(duration, target_c);
+  }
+  void soak(double minutes) {
+    if (minutes > 0) add(minutes * 60.0, now_c());
+  }
+  void mark_cycle() { setpoint_.cycle_start_s.push_back(setpoint_.time_s.back()); }
+  Setpoint take(std::string name) {
+    setpoint_.name = std::move(name);
+    if (setpoint_.cycle_start_s.empty()) setpoint_.cycle_start_s.push_back(0);
+    return std::move(setpoint_);
+  }
+
+ private:
+  void add(double seconds, double target_c) {
+    setpoint_.time_s.push_back(setpoint_.time_s.back() + seconds);
+    setpoint_.temperature_c.push_back(target_c);
+  }
+  Setpoint setpoint_;
+};
+
+}  // namespace
+
+Setpoint draw_profile(ProfileKind kind, const UnitLaw& unit, std::uint64_t seed, int cycles) {
+  if (cycles < 1 || cycles > 100) throw UsageError("profile cycles must be in 1..100");
+  Draw draw(derive_seed(seed, 0x77 + static_cast<std::uint64_t>(kind)));
+  const double span = unit.max_c - unit.min_c;
+  const double start = std::clamp(draw.uniform(15, 25), unit.min_c, unit.max_c);
+  ProgrammeBuilder programme(start);
+  const std::string name = to_string(kind);
+  switch (kind) {
+    case ProfileKind::cycle:
+    case ProfileKind::slow:
+    case ProfileKind::fast: {
+      double low = unit.min_c, high = unit.max_c, rate = draw.uniform(0.5, 1.5);
+      double soak = draw.uniform(30, 90);
+      if (kind == ProfileKind::slow) {
+        rate = draw.uniform(0.2, 0.7);
+        low = std::min(start - 5, unit.min_c + draw.uniform(0, 0.3) * span);
+        high = std::max(start + 5, unit.max_c - draw.uniform(0, 0.3) * span);
+        soak = draw.uniform(20, 60);
+      } else if (kind == ProfileKind::fast) {
+        rate = draw.uniform(2, 3);
+        soak = draw.uniform(20, 60);
+      }
+      const bool heat_first = draw.chance(0.5);
+      for (int c = 0; c < cycles; ++c) {
+        programme.mark_cycle();
+        programme.soak(soak);
+        programme.ramp(heat_first ? high : low, rate);
+        programme.soak(soak);
+        programme.ramp(heat_first ? low : high, rate);
+        programme.soak(soak);
+        programme.ramp(start, rate);
+      }
+      break;
+    }
+    case ProfileKind::staircase: {
+      const double step = draw.uniform(8, 20), rate = draw.uniform(2, 3), soak = draw.uniform(20, 45);
+      for (int c = 0; c < cycles; ++c) {
+        programme.mark_cycle();
+        programme.soak(soak);
+        while (programme.now_c() + step <= unit.max_c) { programme.ramp(programme.now_c() + step, rate); programme.soak(soak); }
+        while (programme.now_c() - step >= unit.min_c) { programme.ramp(programme.now_c() - step, rate); programme.soak(soak); }
+        while (programme.now_c() + step <= start) { programme.ramp(programme.now_c() + step, rate); programme.soak(soak); }
+        programme.ramp(start, rate);
+      }
+      break;
+    }
+    case ProfileKind::partial: {
+      for (int c = 0; c < cycles; ++c) {
+        programme.mark_cycle();
+        const double rate = draw.uniform(0.5, 1.5);
+        const double high = draw.uniform(std::max(start + 10, unit.min_c + 0.5 * span), unit.max_c);
+        const double low = draw.uniform(unit.min_c, std::min(start - 10, unit.min_c + 0.5 * span));
+        programme.soak(draw.uniform(20, 60));
+        programme.ramp(draw.chance(0.5) ? high : low, rate);
+        programme.soak(draw.uniform(10, 60));
+        programme.ramp(draw.uniform(low, high), rate);
+        programme.soak(draw.uniform(30, 90));
+      }
+      break;
+    }
+    case ProfileKind::wander: {
+      programme.mark_cycle();
+      Setpoint setpoint = programme.take(name);
+      const double middle = 0.5 * (unit.min_c + unit.max_c);
+      setpoint.temperature_c.front() = middle;
+      const double hours = draw.uniform(6, 8) * cycles;
+      setpoint.time_s.push_back(hours * 3600);
+      setpoint.temperature_c.push_back(middle);
+      // Three sines whose peak sum stays within the range around its middle.
+      const double budget = 0.45 * span;
+      double used = 0;
+      for (std::size_t i = 0; i < 3; ++i) {
+        setpoint.wander_period_s[i] = draw.uniform(0.7, 4.0) * 3600;
+        setpoint.wander_phase[i] = draw.uniform(0, 2 * std::numbers::pi);
+        setpoint.wander_amplitude_c[i] = draw.uniform(0.15, 0.33) * budget;
+        used += 2 * setpoint.wander_amplitude_c[i];
+      }
+      if (used > budget) {
+        for (auto& amplitude : setpoint.wander_amplitude_c) amplitude *= budget / used;
+      }
+      return setpoint;
+    }
+  }
+  return programme.take(name);
+}
+
+// ---------------------------------------------------------------- the unit in time
+
+namespace {
+
+// The thermal state of the whole unit: the case, each axis' chain, each sensor, and the
+// filtered states of the drift laws. Continuous parts advance by RK4 (every time constant
+// is at least 2 s, the step 1/rate_hz); the play operator is applied after each step.
+class UnitPhysics {
+ public:
+  explicit UnitPhysics(const UnitLaw& unit, double start_c) : unit_(unit) {
+    std::size_t index = 1;  // 0: the case
+    for (const auto& axis : unit.axes) {
+      offsets_.push_back(index);
+      index += axis.node_time_constants_s.size();
+    }
+    sensor_ = index;  // then per axis: sensor, radial gradient, memory
+    state_.assign(index + 9, start_c);
+    for (std::size_t a = 0; a < 3; ++a) {
+      state_[radial(a)] = 0;
+      state_[memory(a)] = 0;
+      play_[a] = start_c;
+    }
+  }
+
+  void step(double t, double dt, const Setpoint& setpoint) {
+    const std::size_t n = state_.size();
+    std::vector<double> k1(n), k2(n), k3(n), k4(n), x(n);
+    derivative(state_, setpoint.temperature(t), k1);
+    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + 0.5 * dt * k1[i];
+    derivative(x, setpoint.temperature(t + 0.5 * dt), k2);
+    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + 0.5 * dt * k2[i];
+    derivative(x, setpoint.temperature(t + 0.5 * dt), k3);
+    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + dt * k3[i];
+    derivative(x, setpoint.temperature(t + dt), k4);
+    for (std::size_t i = 0; i < n; ++i) state_[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const AxisLaw& law = unit_.axes[a];
+      if (law.hysteresis != HysteresisKind::play) continue;
+      const double coil = state_[coil_index(a)];
+      play_[a] = std::clamp(play_[a], coil - law.hysteresis_width_c, coil + law.hysteresis_width_c);
+    }
+  }
+
+  double sensor_c(std::size_t a) const { return state_[sensor_ + 3 * a]; }
+
+  // True drift (°/h) of axis a at time t (s since power-on) with the air at `air_c`.
+  double drift_dph(std::size_t a, double t, double air_c) const {
+    std::vector<double> rate(state_.size());
+    derivative(state_, air_c, rate);
+    const AxisLaw& law = unit_.axes[a];
+    const std::size_t coil = coil_index(a);
+    const double tc = state_[coil];
+    const double delta = tc - unit_.reference_c;
+    double drift = law.bias_dph + law.polynomial[0] * delta + law.polynomial[1] * delta * delta +
+                   law.polynomial[2] * delta * delta * delta;
+    if (law.shape == StaticShape::tanh_step) {
+      drift += law.step_dph * std::tanh((tc - law.step_centre_c) / law.step_width_c);
+    }
+    const double coil_rate = rate[coil] * 60.0;  // °C/min
+    drift += law.rate_dph * coil_rate;
+    const std::size_t upstream = law.node_time_constants_s.size() == 1 ? 0 : coil - 1;
+    const double upstream_c = state_[upstream] + (upstream == 0 ? law.self_heating_c * powered_ : 0.0);
+    drift += law.axial_gradient_dph * (upstream_c - tc);
+    drift += law.axial_gradient_rate_dph * (rate[upstream] * 60.0 - coil_rate);
+    drift += law.radial_gradient_rate_dph * rate[radial(a)] * 60.0;
+    if (law.hysteresis == HysteresisKind::memory) drift += law.hysteresis_dph * state_[memory(a)];
+    if (law.hysteresis == HysteresisKind::play) drift += law.hysteresis_dph * (tc - play_[a]) / law.hysteresis_width_c;
+    drift += law.turn_on_dph * std::exp(-t / law.turn_on_time_constant_s);
+    return drift;
+  }
+
+ private:
+  std::size_t coil_index(std::size_t a) const { return offsets_[a] + unit_.axes[a].node_time_constants_s.size() - 1; }
+  std::size_t radial(std::size_t a) const { return sensor_ + 3 * a + 1; }
+  std::size_t memory(std::size_t a) const { return sensor_ + 3 * a + 2; }
+  std::size_t site(std::size_t a) const {
+    const AxisLaw& law = unit_.axes[a];
+    if (law.sensor_node < 0) return 0;
+    return offsets_[static_cast<std::size_t>(law.sensor_axis)] + static_cast<std::size_t>(law.sensor_node);
+  }
+
+  void derivative(const std::vector<double>& x, double air_c, std::vector<double>& dx) const {
+    std::fill(dx.begin(), dx.end(), 0.0);
+    dx[0] = (air_c + unit_.case_self_heating_c * powered_ - x[0]) / unit_.case_time_constant_s;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const AxisLaw& law = unit_.axes[a];
+      const auto& taus = law.node_time_constants_s;
+      for (std::size_t k = 0; k < taus.size(); ++k) {
+        const std::size_t i = offsets_[a] + k;
+        const double upstream = k == 0 ? x[0] + law.self_heating_c * powered_ : x[i - 1];
+        dx[i] += (upstream - x[i]) / taus[k];
+        if (k > 0) dx[i - 1] += law.back_coupling * (x[i] - x[i - 1]) / taus[k];
+      }
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      const AxisLaw& law = unit_.axes[a];
+      const std::size_t coil = coil_index(a);
+      dx[sensor_ + 3 * a] = (x[site(a)] - x[sensor_ + 3 * a]) / law.sensor_time_constant_s;
+      const double coil_rate = dx[coil];  // final: nothing adds to the coil's rate after the chain loop
+      dx[radial(a)] = (law.radial_gain_s * coil_rate - x[radial(a)]) / law.radial_time_constant_s;
+      dx[memory(a)] = (std::tanh(coil_rate * 60.0 / law.hysteresis_rate_scale) - x[memory(a)]) /
+                      law.hysteresis_time_constant_s;
+    }
+  }
+
+  const UnitLaw& unit_;
+  std::vector<std::size_t> offsets_;
+  std::size_t sensor_ = 0;
+  std::vector<double> state_;
+  std::array<double, 3> play_{};
+  double powered_ = 1.0;
+};
+
+// Rate noise of one axis: white (ARW), bias instability (one Gauss-Markov process, or four
+// a decade apart for a flicker-like floor), and a pulse output's quantization.
+class LawAxisNoise {
+ public:
+  LawAxisNoise(const LawNoise& noise, double dt, std::uint64_t seed, std::uint64_t axis)
+      : white_std_(noise.angle_random_walk * 60.0 / std::sqrt(dt)),
+        quantum_(noise.quantization_arcsec),
+        dt_(dt),
+        white_(derive_seed(seed, 10 * axis)),
+        bias_(derive_seed(seed, 10 * axis + 1)),
+        thermometer_(derive_seed(seed, 10 * axis + 2)),
+        temperature_noise_(noise.temperature_noise_c),
+        resolution_(noise.temperature_resolution_c) {
+    // Gauss-Markov of stationary std σ has an Allan-deviation peak 0.6174·σ; B's floor is 0.664·B.
+    const double sigma = noise.bias_instability * 0.6643 / 0.6174;
+    if (noise.flicker) {
+      for (double tau : {30.0, 300.0, 3000.0, 30000.0}) processes_.push_back({std::exp(-dt / tau), sigma / std::sqrt(1.3), 0});
+    } else {
+      processes_.push_back({std::exp(-dt / noise.bias_correlation_time_s), sigma, 0});
+    }
+    for (auto& p : processes_) p.value = p.sigma * bias_();
+  }
+
+  double gyro_dph(double drift) {
+    double rate = drift + white_std_ * white_();
+    for (auto& p : processes_) {
+      rate += p.value;
+      p.value = p.phi * p.value + p.sigma * std::sqrt(1 - p.phi * p.phi) * bias_();
+    }
+    if (quantum_ <= 0) return rate;
+    carried_ += rate * dt_;
+    const double pulses = std::round(carried_ / quantum_);
+    carried_ -= pulses * quantum_;
+    return pulses * quantum_ / dt_;
+  }
+
+  double temperature_c(double true_c) {
+    const double reading = true_c + temperature_noise_ * thermometer_();
+    return resolution_ > 0 ? std::round(reading / resolution_) * resolution_ : reading;
+  }
+
+ private:
+  struct Process {
+    double phi, sigma, value;
+  };
+  double white_std_, quantum_, dt_;
+  StandardNormal white_, bias_, thermometer_;
+  double temperature_noise_, resolution_;
+  std::vector<Process> processes_;
+  double carried_ = 0;
+};
+
+}  // namespace
+
+ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed, double rate_hz) {
+  if (!(rate_hz > 0 && rate_hz <= 100)) throw UsageError("the law family simulates at 0..100 Hz");
+  if (setpoint.time_s.size() < 2) throw UsageError("a programme needs at least two knots");
+  const double dt = 1.0 / rate_hz;
+  const auto rows = static_cast<std::size_t>(std::floor(setpoint.duration_s() * rate_hz + 1e-9)) + 1;
+  ChamberRun run;
+  run.rate_hz = rate_hz;
+  run.cycle_start_s = setpoint.cycle_start_s;
+  for (std::string_view name : chamber_run_columns) run.column_names.emplace_back(name);
+  run.columns.assign(run.column_names.size(), std::vector<double>(rows));
+
+  UnitPhysics physics(unit, setpoint.temperature(0));
+  std::vector<LawAxisNoise> noise;
+  for (std::uint64_t a = 0; a < 3; ++a) noise.emplace_back(unit.noise, dt, noise_seed, a);
+  for (std::size_t k = 0; k < rows; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    const double air = setpoint.temperature(t);
+    run.columns[0][k] = t;
+    run.columns[1][k] = air;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double drift = physics.drift_dph(a, t, air);
+      run.columns[2 + a][k] = noise[a].temperature_c(physics.sensor_c(a));
+      run.columns[5 + a][k] = noise[a].gyro_dph(drift);
+      run.columns[8 + a][k] = drift;
+    }
+    physics.step(t, dt, setpoint);
+  }
+  return run;
+}
+
+}  // namespace thermodrift::sim
