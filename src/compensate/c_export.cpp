@@ -67,6 +67,7 @@ std::pair<std::size_t, std::size_t> factor_cost(const FeatureFactor& factor) {
   const std::size_t powers = static_cast<std::size_t>(factor.power);
   switch (factor.atom.kind) {
     case Kind::lag: return {1, 4 + powers};
+    case Kind::hinge: return {1, 6 + powers};
     case Kind::lag_rate: return {1, 7 + powers};
     case Kind::gradient_rate: return {2, 14 + powers};
     case Kind::direction: return {factor.atom.tau2 > 0 ? 3 : 2, (factor.atom.tau2 > 0 ? 14 : 9) + powers};
@@ -715,6 +716,12 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
             out += fmt::format("    {s}[0] = {p}_lag({s}[0], delta_t, {step}, {tau});\n", fmt::arg("s", state),
                                fmt::arg("p", p), fmt::arg("step", step), fmt::arg("tau", Literal::time(atom.tau)));
             value = state + "[0]";
+            break;
+          case FeatureAtom::Kind::hinge:
+            out += fmt::format("    {s}[0] = {p}_lag({s}[0], delta_t, {step}, {tau});\n", fmt::arg("s", state),
+                               fmt::arg("p", p), fmt::arg("step", step), fmt::arg("tau", Literal::time(atom.tau)));
+            value = fmt::format("({s}[0] > {k} ? {s}[0] - {k} : ({p}_real)0)", fmt::arg("s", state), fmt::arg("p", p),
+                                fmt::arg("k", literal(atom.level)));
             break;
           case FeatureAtom::Kind::lag_rate:
             value = fmt::format("{}_lag_rate(&{}[0], delta_t, {}, {})", p, state, step, Literal::time(atom.tau));

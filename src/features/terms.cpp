@@ -19,6 +19,7 @@ constexpr std::string_view kKnownTerms =
     "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, "
     "products A*B and powers A^2";
 constexpr double kMaxTimeConstant = 1e6;  // s; eleven days is no thermal lag of a gyro
+constexpr double kMaxKnot = 1000;  // °C of ΔT: beyond any chamber
 constexpr int kMaxPower = 4;
 
 [[noreturn]] void bad_term(const std::string& text, const std::string& why) {
@@ -44,6 +45,19 @@ double parse_time_constant(const std::string& term, std::string_view text) {
   if (token.empty() || end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value) ||
       value <= 0 || value > kMaxTimeConstant) {
     bad_term(term, fmt::format("time constant '{}' must be a number of seconds in (0, {:g}]", token, kMaxTimeConstant));
+  }
+  return value;
+}
+
+// A knot of hinge: a finite temperature difference, °C (negative below the reference).
+double parse_level(const std::string& term, std::string_view text) {
+  const std::string token(text);
+  char* end = nullptr;
+  errno = 0;
+  const double value = token.empty() ? 0 : std::strtod(token.c_str(), &end);
+  if (token.empty() || end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value) ||
+      std::abs(value) > kMaxKnot) {
+    bad_term(term, fmt::format("knot '{}' must be a temperature difference in [-{:g}, {:g}] °C", token, kMaxKnot, kMaxKnot));
   }
   return value;
 }
@@ -93,6 +107,12 @@ FeatureAtom parse_atom(const std::string& term, std::string_view text) {
     if (parts.size() != 3) bad_term(term, "gradrate takes two time constants, gradrate:TAU:TG, or two channels, gradrate:A-B");
     return {Kind::gradient_rate, parse_time_constant(term, parts[1]), parse_time_constant(term, parts[2])};
   }
+  if (head == "hinge") {
+    if (parts.size() != 3) bad_term(term, "hinge takes a time constant and a knot: hinge:TAU:K");
+    FeatureAtom atom{Kind::hinge, parse_time_constant(term, parts[1])};
+    atom.level = parse_level(term, parts[2]);
+    return atom;
+  }
   if (head == "dir") {
     if (parts.size() != 2 && parts.size() != 3) bad_term(term, "dir takes one or two time constants: dir:TAU[:LAG]");
     return {Kind::direction, parse_time_constant(term, parts[1]),
@@ -119,6 +139,7 @@ std::string FeatureAtom::name() const {
     case Kind::input: return fmt::format("x{}", input_index + 1);
     case Kind::channel_gradient: return fmt::format("grad:{}-{}", channel + 1, channel2 + 1);
     case Kind::channel_gradient_rate: return fmt::format("gradrate:{}-{}", channel + 1, channel2 + 1);
+    case Kind::hinge: return fmt::format("hinge:{}:{}", tau, level);
   }
   return "?";
 }
@@ -211,6 +232,9 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
       state.second = lag_step(state.second, coil_rate, step_seconds, atom.tau2);
       return (coil_rate - state.second) / atom.tau2 * 60.0;
     }
+    case Kind::hinge:
+      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      return std::max(0.0, state.first - atom.level);
     case Kind::direction: {
       double source = inputs.rate;
       if (atom.tau2 > 0) {

@@ -16,6 +16,9 @@
 //                    (A, B: 1-based channel numbers in the log's --temp order; a gradient
 //                    across the unit, say housing minus chamber or coil minus mount)
 //   gradrate:A-B     its rate, the backward difference over the rate span, °C/min
+//   hinge:TAU:K      max(0, L - K), L = lag:TAU, K in °C of ΔT: with lag:TAU and several knots K, a
+//                    piecewise-linear static map of the node temperature (linear beyond the last
+//                    knots, so it extrapolates along the slopes it was fitted with)
 //   xN               column N of libsvm-format data, as given (never streamed)
 // A term is one atom or a product of atoms with powers: "dT^2", "dT*rate", "lag:600^2*rate".
 //
@@ -39,13 +42,14 @@ inline constexpr std::size_t kMaxTemperatureChannels = 64;
 
 struct FeatureAtom {
   enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input, channel_gradient,
-                    channel_gradient_rate };
+                    channel_gradient_rate, hinge };
   Kind kind = Kind::delta_t;
   double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory)
   double tau2 = 0;              // s: gradrate (gradient lag); dir (lag of its rate, 0: smoothed rate)
   std::size_t input_index = 0;  // 0-based column, for Kind::input
   std::size_t channel = 0;      // 0-based temperature channels A and B of grad / gradrate:A-B
   std::size_t channel2 = 0;
+  double level = 0;             // °C of ΔT: the knot of hinge:TAU:K
 
   bool reads_channels() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
 
