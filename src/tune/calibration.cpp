@@ -131,10 +131,11 @@ FeatureTable settled_rows(const FeatureTable& table, double settle_seconds) {
 // (too short a log says so in terms of the warm-up, not of folds).
 FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
                                  const CalibrationOptions& calibration) {
-  const FeatureSelectionOptions options;  // its own folds, not the tuning's
+  const FeatureSelectionOptions& options = calibration.selection;  // its own folds, not the tuning's
   require_samples(feature_table(logs, pipeline, axis, true), pipeline, logs, 4 * static_cast<std::size_t>(options.folds));
   if (calibration.selection_progress) calibration.selection_progress(axis, "choosing feature terms");
-  return select_features(logs, axis, pipeline, options);
+  if (options.method == FeatureSelectionOptions::Method::greedy) return select_features(logs, axis, pipeline, options);
+  return identify_thermal_node(logs, axis, pipeline, options);
 }
 
 }  // namespace
@@ -304,11 +305,11 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     axis_model.kind = options.model;
     nlohmann::json selection_json;
     if (chooses_features(options)) {
-      const FeatureSelectionOptions selection_options;
+      const FeatureSelectionOptions& selection_options = options.selection;
       FeatureSelection selection = axis < options.selections.size()
                                        ? options.selections[axis]
                                        : search_features(logs, axis, axis_model.pipeline, options);
-      if (options.model == "svr") {
+      if (options.model == "svr" && selection_options.method == FeatureSelectionOptions::Method::greedy) {
         if (options.selection_progress) options.selection_progress(axis, "judging the chosen terms by SVR");
         SvrJudgeOptions judge;
         judge.tuning = options.tuning;
@@ -316,6 +317,11 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
         if (options.tuning) judge.folds = options.tuning->folds;
         judge.min_gain = selection_options.min_gain;
         judge_by_svr(selection, logs, axis, axis_model.pipeline, judge);
+      }
+      if (options.model == "svr" && selection_options.method == FeatureSelectionOptions::Method::thermal_node) {
+        // The RBF kernel is itself a flexible map of the node's temperature: the hinges
+        // that give least squares one would only distort its distances.
+        std::erase_if(selection.terms, [](const std::string& term) { return term.starts_with("hinge:"); });
       }
       axis_model.pipeline.terms.clear();
       for (const auto& term : selection.terms) axis_model.pipeline.terms.push_back(FeatureTerm::parse(term));

@@ -12,6 +12,7 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/models/svr_model.hpp"
 #include "thermodrift/tune/calibration.hpp"
+#include "tune/term_columns.hpp"
 
 namespace thermodrift {
 
@@ -19,82 +20,6 @@ namespace {
 
 using Terms = std::vector<std::string>;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-// The ready, decimated samples of every term asked for so far, one column per term name:
-// each new batch of terms is one streaming pass over the logs. The time-constant search
-// asks for many columns, so past a byte budget the cache starts afresh.
-class ColumnCache {
- public:
-  ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline)
-      : logs_(&logs), axis_(axis), pipeline_(pipeline) {
-    pipeline_.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
-    const FeatureTable table = feature_table(logs, pipeline_, axis, true);
-    target_ = table.target;
-  }
-
-  const Eigen::VectorXd& target() const { return target_; }
-
-  void ensure(const Terms& names) {
-    pipeline_.terms.clear();
-    for (const auto& name : names) {
-      if (!columns_.count(name)) pipeline_.terms.push_back(FeatureTerm::parse(name));
-    }
-    if (pipeline_.terms.empty()) return;
-    const std::size_t column_bytes = static_cast<std::size_t>(target_.size()) * sizeof(double);
-    if ((columns_.size() + pipeline_.terms.size()) * column_bytes > kBudgetBytes) {
-      std::erase_if(columns_, [&](const auto& entry) {
-        return std::find(names.begin(), names.end(), entry.first) == names.end();
-      });
-    }
-    const FeatureTable table = feature_table(*logs_, pipeline_, axis_, true);
-    for (std::size_t j = 0; j < pipeline_.terms.size(); ++j) {
-      columns_[pipeline_.terms[j].name()] = table.features.col(static_cast<Eigen::Index>(j));
-    }
-  }
-
-  Eigen::MatrixXd matrix(const Terms& names) {
-    ensure(names);
-    Eigen::MatrixXd x(target_.size(), static_cast<Eigen::Index>(names.size()));
-    for (std::size_t j = 0; j < names.size(); ++j) x.col(static_cast<Eigen::Index>(j)) = columns_.at(names[j]);
-    return x;
-  }
-
- private:
-  static constexpr std::size_t kBudgetBytes = std::size_t{256} << 20;
-  const std::vector<ChamberLog>* logs_;
-  std::size_t axis_;
-  Pipeline pipeline_;
-  Eigen::VectorXd target_;
-  std::map<std::string, Eigen::VectorXd> columns_;
-};
-
-// Pooled MSE of least squares (with an intercept) over blocked folds: each block is
-// predicted by the fit on the rest. Columns are scaled first so that powers of large
-// values do not spoil the QR's rank decisions.
-double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int folds) {
-  const Eigen::Index n = y.size();
-  Eigen::MatrixXd design(n, x.cols() + 1);
-  design.col(0).setOnes();
-  for (Eigen::Index j = 0; j < x.cols(); ++j) {
-    const double scale = x.col(j).cwiseAbs().maxCoeff();
-    design.col(j + 1) = scale > 0 ? Eigen::VectorXd(x.col(j) / scale) : Eigen::VectorXd(x.col(j));
-  }
-  double squared_error = 0;
-  for (const SampleRange& block : blocked_folds(n, folds)) {
-    const Eigen::Index train_rows = n - block.size();
-    Eigen::MatrixXd a(train_rows, design.cols());
-    Eigen::VectorXd b(train_rows);
-    a.topRows(block.begin) = design.topRows(block.begin);
-    a.bottomRows(n - block.end) = design.bottomRows(n - block.end);
-    b.head(block.begin) = y.head(block.begin);
-    b.tail(n - block.end) = y.tail(n - block.end);
-    const Eigen::VectorXd beta = a.colPivHouseholderQr().solve(b);
-    const Eigen::VectorXd residual = y.segment(block.begin, block.size()) -
-                                     design.middleRows(block.begin, block.size()) * beta;
-    squared_error += residual.squaredNorm();
-  }
-  return squared_error / static_cast<double>(n);
-}
 
 // `terms` with every time constant equal to `from` set to `to`.
 std::vector<std::string> with_time_constant(const std::vector<std::string>& terms, double from, double to) {

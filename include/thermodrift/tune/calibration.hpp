@@ -32,6 +32,7 @@ struct CalibrationOptions {
   // With terms {"auto"}: the least-squares selections per axis when already made (a study
   // fitting several models shares one search); empty: calibrate searches.
   std::vector<FeatureSelection> selections;
+  FeatureSelectionOptions selection;       // how terms {"auto"} are identified
   // A line of progress of axis `axis` outside tuning (feature selection); may be empty.
   std::function<void(std::size_t axis, const std::string&)> selection_progress;
 };

@@ -22,6 +22,15 @@
 namespace thermodrift {
 
 struct FeatureSelectionOptions {
+  // thermal_node (default): one node's static map and dynamics, identified as a structure
+  // (identify_thermal_node); greedy: the forward search over single terms (select_features).
+  enum class Method { thermal_node, greedy };
+  Method method = Method::thermal_node;
+  std::size_t knots = 7;              // thermal_node: hinges of the node's static map (fewer if they do not pay)
+  double min_time_constant = 15;      // s: the node's lag grid starts here, steps of √2
+  double max_time_constant = 5400;    // s: and stops here or at a quarter of the training span
+  std::size_t max_dynamic_terms = 4;
+  double max_second_lag = 1200;       // s: a second lag longer than this mostly follows the log's start  // thermal_node: gradient rates, memories, second lags
   // Blocked CV: contiguous blocks in time. Ten, not the tuning's five: with five, each
   // block is a whole regime of a chamber cycle (the hot soak, the cold ramp), and terms
   // that happen to extrapolate into it win over the physical ones (docs/features.md).
@@ -80,6 +89,13 @@ std::vector<double> time_constant_grid();
 // when there are too few samples for the folds.
 FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
                                  const FeatureSelectionOptions& options);
+
+// One thermal node per axis (docs/features.md): the node's lag τ chosen by blocked CV on a
+// grid limited to what the log can identify, a piecewise-linear map of its temperature,
+// its rate and the sensor's, then dynamic terms linear in the node's state (gradient
+// rate, direction memory, a second lag) while each pays.
+FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std::size_t axis,
+                                       const Pipeline& pipeline, const FeatureSelectionOptions& options);
 
 // Of the sets `selection`'s search settled on after each addition (the last `sets` of
 // them), keeps the one whose AFSA-tuned SVR has the lowest penalized blocked CV MSE; adds

@@ -1,0 +1,70 @@
+// What the feature searches share: the columns of candidate terms over the training logs,
+// computed once per term, and the blocked cross-validation of a least-squares fit on them.
+#pragma once
+
+#include <algorithm>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "thermodrift/features/pipeline.hpp"
+#include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/tune/calibration.hpp"
+
+namespace thermodrift {
+
+// The ready, decimated samples of every term asked for so far, one column per term name:
+// each new batch of terms is one streaming pass over the logs. The time-constant search
+// asks for many columns, so past a byte budget the cache starts afresh.
+class ColumnCache {
+ public:
+  ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline)
+      : logs_(&logs), axis_(axis), pipeline_(pipeline) {
+    pipeline_.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
+    const FeatureTable table = feature_table(logs, pipeline_, axis, true);
+    target_ = table.target;
+  }
+
+  const Eigen::VectorXd& target() const { return target_; }
+
+  void ensure(const std::vector<std::string>& names) {
+    pipeline_.terms.clear();
+    for (const auto& name : names) {
+      if (!columns_.count(name)) pipeline_.terms.push_back(FeatureTerm::parse(name));
+    }
+    if (pipeline_.terms.empty()) return;
+    const std::size_t column_bytes = static_cast<std::size_t>(target_.size()) * sizeof(double);
+    if ((columns_.size() + pipeline_.terms.size()) * column_bytes > kBudgetBytes) {
+      std::erase_if(columns_, [&](const auto& entry) {
+        return std::find(names.begin(), names.end(), entry.first) == names.end();
+      });
+    }
+    const FeatureTable table = feature_table(*logs_, pipeline_, axis_, true);
+    for (std::size_t j = 0; j < pipeline_.terms.size(); ++j) {
+      columns_[pipeline_.terms[j].name()] = table.features.col(static_cast<Eigen::Index>(j));
+    }
+  }
+
+  Eigen::MatrixXd matrix(const std::vector<std::string>& names) {
+    ensure(names);
+    Eigen::MatrixXd x(target_.size(), static_cast<Eigen::Index>(names.size()));
+    for (std::size_t j = 0; j < names.size(); ++j) x.col(static_cast<Eigen::Index>(j)) = columns_.at(names[j]);
+    return x;
+  }
+
+ private:
+  static constexpr std::size_t kBudgetBytes = std::size_t{256} << 20;
+  const std::vector<ChamberLog>* logs_;
+  std::size_t axis_;
+  Pipeline pipeline_;
+  Eigen::VectorXd target_;
+  std::map<std::string, Eigen::VectorXd> columns_;
+};
+
+// Pooled MSE of least squares (with an intercept) over `folds` contiguous blocks in time:
+// each block is predicted by the fit on the rest.
+double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int folds);
+
+}  // namespace thermodrift

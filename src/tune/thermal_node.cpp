@@ -1,0 +1,169 @@
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "thermodrift/error.hpp"
+#include "thermodrift/tune/feature_selection.hpp"
+#include "tune/term_columns.hpp"
+
+namespace thermodrift {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// A term linear in the node's dynamics, added to the node's static map when it pays.
+struct DynamicTerm {
+  enum class Kind { gradient_rate, memory, second_lag } kind;
+  double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ
+
+  std::string name(double node_tau) const {
+    switch (kind) {
+      case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", node_tau, tau);
+      case Kind::memory: return fmt::format("dir:{}:{}", tau, node_tau);
+      case Kind::second_lag: return fmt::format("lag:{}", tau);
+    }
+    return {};
+  }
+  bool operator==(const DynamicTerm&) const = default;
+};
+
+// One thermal node behind the axis' sensor: its temperature L (a lag τ of the smoothed
+// ΔT) through a piecewise-linear static map (L and hinges at fixed knots), its rate, the
+// sensor's own rate, and dynamic terms linear in the node's state.
+struct NodeModel {
+  double tau = 0;
+  std::vector<double> knots;  // °C of ΔT
+  std::vector<DynamicTerm> dynamics;
+
+  std::vector<std::string> terms() const {
+    std::vector<std::string> out = {fmt::format("lag:{}", tau)};
+    for (const double knot : knots) out.push_back(fmt::format("hinge:{}:{}", tau, knot));
+    out.push_back(fmt::format("lagrate:{}", tau));
+    out.push_back("rate");
+    for (const auto& term : dynamics) out.push_back(term.name(tau));
+    return out;
+  }
+};
+
+// Knots spaced evenly between the 1st and 99th percentiles of the training ΔT, rounded to
+// 0.1 °C: evenly, not at quantiles, since a soak piles samples at one temperature and
+// knots crowded there would bend the map sharply where nothing constrains it.
+std::vector<double> spread_knots(const Eigen::VectorXd& delta_t, std::size_t count) {
+  std::vector<double> sorted(delta_t.data(), delta_t.data() + delta_t.size());
+  std::sort(sorted.begin(), sorted.end());
+  if (sorted.empty() || count == 0) return {};
+  const auto at = [&](double p) { return sorted[static_cast<std::size_t>(p * static_cast<double>(sorted.size() - 1))]; };
+  const double low = at(0.01), high = at(0.99);
+  std::vector<double> knots;
+  for (std::size_t j = 1; j <= count; ++j) {
+    const double knot = std::round((low + (high - low) * static_cast<double>(j) / static_cast<double>(count + 1)) * 10.0) / 10.0;
+    if (knots.empty() || knot > knots.back() + 0.05) knots.push_back(knot);
+  }
+  return knots;
+}
+
+double training_span_seconds(const std::vector<ChamberLog>& logs) {
+  double span = 0;
+  for (const auto& log : logs) {
+    if (log.rows() > 1) span += log.time.back() - log.time.front();
+  }
+  return span;
+}
+
+}  // namespace
+
+FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std::size_t axis,
+                                       const Pipeline& pipeline, const FeatureSelectionOptions& options) {
+  ColumnCache cache(logs, axis, pipeline);
+  const Eigen::VectorXd& y = cache.target();
+  if (y.size() < 4 * options.folds) {
+    throw UsageError(fmt::format("--features auto: {} samples are too few for {}-fold identification", y.size(),
+                                 options.folds));
+  }
+  FeatureSelection result;
+  result.scored_by = "least_squares";
+  auto score = [&](const NodeModel& model) {
+    ++result.candidates_scored;
+    return least_squares_cv(cache.matrix(model.terms()), y, options.folds);
+  };
+  result.start_mse = least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, options.folds);
+
+  // A lag is identifiable when the log holds several of it: at most a quarter of its span.
+  const double longest = std::min(options.max_time_constant, training_span_seconds(logs) / 4.0);
+  std::vector<double> grid;
+  for (int k = 0;; ++k) {
+    const double tau = std::round(options.min_time_constant * std::pow(std::sqrt(2.0), k));
+    if (tau > longest) break;
+    grid.push_back(tau);
+  }
+  if (grid.empty()) grid.push_back(options.min_time_constant);
+
+  NodeModel best;
+  best.knots = spread_knots(cache.matrix({"dT"}).col(0), options.knots);
+  double best_cv = kInfinity;
+  for (const double tau : grid) {
+    NodeModel trial = best;
+    trial.tau = tau;
+    const double cv = score(trial);
+    if (cv < best_cv) best_cv = cv, best.tau = tau;
+  }
+  result.path.push_back({"node", fmt::format("lag {} s of {} on the grid", best.tau, grid.size()), best_cv, best.terms()});
+
+  // The node's time constant between grid points: a pattern search in log scale.
+  auto refine_tau = [&](NodeModel& model, double& model_cv) {
+    const double before = model.tau;
+    for (const double step : {0.25, 0.125, 0.0625}) {
+      for (bool improved = true; improved;) {
+        improved = false;
+        for (const double factor : {std::pow(2.0, step), std::pow(2.0, -step)}) {
+          NodeModel trial = model;
+          trial.tau = std::round(model.tau * factor);
+          if (trial.tau == model.tau || trial.tau < options.min_time_constant / 2 || trial.tau > longest) continue;
+          const double cv = score(trial);
+          if (cv < model_cv) {
+            model = std::move(trial), model_cv = cv, improved = true;
+            break;
+          }
+        }
+      }
+    }
+    if (model.tau != before) {
+      result.path.push_back({"tune", fmt::format("{} -> {}", before, model.tau), model_cv, model.terms()});
+    }
+  };
+  refine_tau(best, best_cv);
+
+  // Dynamic terms, forward: each must cut the CV MSE by more than min_gain.
+  std::vector<DynamicTerm> candidates;
+  for (const double tau : grid) {
+    if (tau <= 1920) candidates.push_back({DynamicTerm::Kind::gradient_rate, tau});
+    if (tau <= options.max_second_lag) candidates.push_back({DynamicTerm::Kind::second_lag, tau});
+  }
+  for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) candidates.push_back({DynamicTerm::Kind::memory, tau});
+  const double keep = 1.0 - options.min_gain;
+  while (best.dynamics.size() < options.max_dynamic_terms) {
+    NodeModel chosen;
+    double chosen_cv = kInfinity;
+    for (const auto& candidate : candidates) {
+      if (std::find(best.dynamics.begin(), best.dynamics.end(), candidate) != best.dynamics.end()) continue;
+      if (candidate.kind == DynamicTerm::Kind::second_lag && candidate.tau == best.tau) continue;
+      NodeModel trial = best;
+      trial.dynamics.push_back(candidate);
+      const double cv = score(trial);
+      if (cv < chosen_cv) chosen_cv = cv, chosen = std::move(trial);
+    }
+    if (!(chosen_cv < keep * best_cv)) break;
+    best = std::move(chosen), best_cv = chosen_cv;
+    result.path.push_back({"add", best.dynamics.back().name(best.tau), best_cv, best.terms()});
+    refine_tau(best, best_cv);
+  }
+
+  result.terms = best.terms();
+  result.cv_mse = best_cv;
+  return result;
+}
+
+}  // namespace thermodrift
