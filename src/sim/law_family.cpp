@@ -478,9 +478,12 @@ class LawAxisNoise {
         temperature_noise_(noise.temperature_noise_c),
         resolution_(noise.temperature_resolution_c) {
     // Gauss-Markov of stationary std σ has an Allan-deviation peak 0.6174·σ; B's floor is 0.664·B.
+    // Four processes a decade apart, each of variance s², have an Allan variance of 1.44-1.58
+    // times one process' peak (0.3811·s²) between 100 s and 2·10⁴ s, 1.55 at the peaks: with
+    // s² = σ²/1.55 their floor is B's.
     const double sigma = noise.bias_instability * 0.6643 / 0.6174;
     if (noise.flicker) {
-      for (double tau : {30.0, 300.0, 3000.0, 30000.0}) processes_.push_back({std::exp(-dt / tau), sigma / std::sqrt(1.3), 0});
+      for (double tau : {30.0, 300.0, 3000.0, 30000.0}) processes_.push_back({std::exp(-dt / tau), sigma / std::sqrt(1.55), 0});
     } else {
       processes_.push_back({std::exp(-dt / noise.bias_correlation_time_s), sigma, 0});
     }
