@@ -212,7 +212,9 @@ class ProgrammeBuilder {
   double now_c() const { return setpoint_.temperature_c.back(); }
   void ramp(double target_c, double rate_c_per_min) {
     const double duration = std::abs(target_c - now_c()) / rate_c_per_min * 60.0;
-    if (duration <= 0) return;
+    // Rounding leaves the staircase's last step a few ulp short of the start: no knot for it
+    // (it would repeat the previous knot's time).
+    if (duration < 1e-6) return;
     add(duration, target_c);
   }
   void soak(double minutes) {
