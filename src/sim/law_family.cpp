@@ -212,7 +212,9 @@ class ProgrammeBuilder {
   double now_c() const { return setpoint_.temperature_c.back(); }
   void ramp(double target_c, double rate_c_per_min) {
     const double duration = std::abs(target_c - now_c()) / rate_c_per_min * 60.0;
-    if (duration <= 0) return;
+    // Rounding leaves the staircase's last step a few ulp short of the start: no knot for it
+    // (it would repeat the previous knot's time).
+    if (duration < 1e-6) return;
     add(duration, target_c);
   }
   void soak(double minutes) {
@@ -326,11 +328,12 @@ Setpoint draw_profile(ProfileKind kind, const UnitLaw& unit, std::uint64_t seed,
 namespace {
 
 // The thermal state of the whole unit: the case, each axis' chain, each sensor, and the
-// filtered states of the drift laws. Continuous parts advance by RK4 (every time constant
-// is at least 2 s, the step 1/rate_hz); the play operator is applied after each step.
+// filtered states of the drift laws. Continuous parts advance by RK4 in substeps of the
+// sample interval; the play operator is applied after each substep.
 class UnitPhysics {
  public:
-  explicit UnitPhysics(const UnitLaw& unit, double start_c) : unit_(unit) {
+  explicit UnitPhysics(const UnitLaw& unit, double start_c)
+      : unit_(unit), fastest_rate_bound_per_s_(fastest_rate_bound(unit)) {
     std::size_t index = 1;  // 0: the case
     for (const auto& axis : unit.axes) {
       offsets_.push_back(index);
@@ -345,23 +348,13 @@ class UnitPhysics {
     }
   }
 
+  // Advances dt in substeps short enough for RK4: with h·|λ| <= 1 for the fastest mode it
+  // is stable (the limit is 2.78) and accurate, whatever the sample rate. At 1 Hz and above
+  // the drawn time constants (>= 2 s) need one substep.
   void step(double t, double dt, const Setpoint& setpoint) {
-    const std::size_t n = state_.size();
-    std::vector<double> k1(n), k2(n), k3(n), k4(n), x(n);
-    derivative(state_, setpoint.temperature(t), k1);
-    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + 0.5 * dt * k1[i];
-    derivative(x, setpoint.temperature(t + 0.5 * dt), k2);
-    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + 0.5 * dt * k2[i];
-    derivative(x, setpoint.temperature(t + 0.5 * dt), k3);
-    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + dt * k3[i];
-    derivative(x, setpoint.temperature(t + dt), k4);
-    for (std::size_t i = 0; i < n; ++i) state_[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-    for (std::size_t a = 0; a < 3; ++a) {
-      const AxisLaw& law = unit_.axes[a];
-      if (law.hysteresis != HysteresisKind::play) continue;
-      const double coil = state_[coil_index(a)];
-      play_[a] = std::clamp(play_[a], coil - law.hysteresis_width_c, coil + law.hysteresis_width_c);
-    }
+    const int substeps = std::max(1, static_cast<int>(std::ceil(dt * fastest_rate_bound_per_s_ - 1e-12)));
+    const double h = dt / substeps;
+    for (int s = 0; s < substeps; ++s) rk4_step(t + s * h, h, setpoint);
   }
 
   double sensor_c(std::size_t a) const { return state_[sensor_ + 3 * a]; }
@@ -402,6 +395,44 @@ class UnitPhysics {
     return offsets_[static_cast<std::size_t>(law.sensor_axis)] + static_cast<std::size_t>(law.sensor_node);
   }
 
+  void rk4_step(double t, double dt, const Setpoint& setpoint) {
+    const std::size_t n = state_.size();
+    std::vector<double> k1(n), k2(n), k3(n), k4(n), x(n);
+    derivative(state_, setpoint.temperature(t), k1);
+    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + 0.5 * dt * k1[i];
+    derivative(x, setpoint.temperature(t + 0.5 * dt), k2);
+    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + 0.5 * dt * k2[i];
+    derivative(x, setpoint.temperature(t + 0.5 * dt), k3);
+    for (std::size_t i = 0; i < n; ++i) x[i] = state_[i] + dt * k3[i];
+    derivative(x, setpoint.temperature(t + dt), k4);
+    for (std::size_t i = 0; i < n; ++i) state_[i] += dt / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const AxisLaw& law = unit_.axes[a];
+      if (law.hysteresis != HysteresisKind::play) continue;
+      const double coil = state_[coil_index(a)];
+      play_[a] = std::clamp(play_[a], coil - law.hysteresis_width_c, coil + law.hysteresis_width_c);
+    }
+  }
+
+  // Gershgorin: every eigenvalue of the (linearised) network lies within the largest
+  // absolute row sum of its Jacobian. A lag row relaxing at rate r towards its neighbours
+  // sums to 2r; the radial and memory rows also read the coil's rate (Tup - Tc)/τn.
+  static double fastest_rate_bound(const UnitLaw& unit) {
+    double bound = 2.0 / unit.case_time_constant_s;
+    for (const AxisLaw& law : unit.axes) {
+      const auto& taus = law.node_time_constants_s;
+      for (std::size_t k = 0; k < taus.size(); ++k) {
+        const double pulled = k + 1 < taus.size() ? law.back_coupling / taus[k + 1] : 0.0;
+        bound = std::max(bound, 2.0 * (1.0 / taus[k] + pulled));
+      }
+      const double coil_rate_gain = 2.0 / taus.back();  // |∂(dTc/dt)/∂x| summed over Tup and Tc
+      const double radial = (1.0 + law.radial_gain_s * coil_rate_gain) / law.radial_time_constant_s;
+      const double memory = (1.0 + 60.0 / law.hysteresis_rate_scale * coil_rate_gain) / law.hysteresis_time_constant_s;
+      bound = std::max({bound, 2.0 / law.sensor_time_constant_s, radial, memory});
+    }
+    return bound;
+  }
+
   void derivative(const std::vector<double>& x, double air_c, std::vector<double>& dx) const {
     std::fill(dx.begin(), dx.end(), 0.0);
     dx[0] = (air_c + unit_.case_self_heating_c * powered_ - x[0]) / unit_.case_time_constant_s;
@@ -427,6 +458,7 @@ class UnitPhysics {
   }
 
   const UnitLaw& unit_;
+  double fastest_rate_bound_per_s_;
   std::vector<std::size_t> offsets_;
   std::size_t sensor_ = 0;
   std::vector<double> state_;
@@ -448,9 +480,12 @@ class LawAxisNoise {
         temperature_noise_(noise.temperature_noise_c),
         resolution_(noise.temperature_resolution_c) {
     // Gauss-Markov of stationary std σ has an Allan-deviation peak 0.6174·σ; B's floor is 0.664·B.
+    // Four processes a decade apart, each of variance s², have an Allan variance of 1.44-1.58
+    // times one process' peak (0.3811·s²) between 100 s and 2·10⁴ s, 1.55 at the peaks: with
+    // s² = σ²/1.55 their floor is B's.
     const double sigma = noise.bias_instability * 0.6643 / 0.6174;
     if (noise.flicker) {
-      for (double tau : {30.0, 300.0, 3000.0, 30000.0}) processes_.push_back({std::exp(-dt / tau), sigma / std::sqrt(1.3), 0});
+      for (double tau : {30.0, 300.0, 3000.0, 30000.0}) processes_.push_back({std::exp(-dt / tau), sigma / std::sqrt(1.55), 0});
     } else {
       processes_.push_back({std::exp(-dt / noise.bias_correlation_time_s), sigma, 0});
     }
