@@ -23,7 +23,7 @@ std::vector<FeatureTerm> parse_all(const std::vector<std::string>& names) {
 TEST(FeatureTerms, NamesRoundTrip) {
   for (const std::string name : {"dT", "rate", "lag:600", "lagrate:420", "gradrate:420:240", "dir:900",
                                  "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3", "grad:1-4",
-                                 "gradrate:12-3", "grad:2-1*lag:600"}) {
+                                 "gradrate:12-3", "grad:2-1*lag:600", "hinge:600:-12.5", "hinge:600:0", "hinge:60:3*rate"}) {
     EXPECT_EQ(FeatureTerm::parse(name).name(), name);
   }
   const auto term = FeatureTerm::parse("gradrate:420:240");
@@ -39,7 +39,9 @@ TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
   for (const std::string bad : {"", "lag", "lag:", "lag:0", "lag:-5", "lag:abc", "lag:1e7", "lag:nan", "lag:300:2",
                                 "gradrate:400", "dir", "dir:1:2:3", "dT^5", "dT^0", "dT^2^2", "dT^", "foo", "dT*",
                                 "x0", "x3^2", "x3*dT", "rate:60", "grad", "grad:1", "grad:1-1", "grad:0-2", "grad:1-65",
-                                "grad:a-b", "grad:1-2-3", "gradrate:1-", "grad:1-2:3", "grad:-1-2", "grad:001-2"}) {
+                                "grad:a-b", "grad:1-2-3", "gradrate:1-", "grad:1-2:3", "grad:-1-2", "grad:001-2",
+                                "hinge", "hinge:600", "hinge:0:5", "hinge:600:x", "hinge:600:nan", "hinge:600:1e9",
+                                "hinge:600:1:2"}) {
     try {
       FeatureTerm::parse(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -130,6 +132,23 @@ TEST(FeatureTerms, ChannelGradientsAreDifferencesOfTheChannels) {
 }
 
 // A product is the product of its atoms' streams, each with its own state.
+// hinge:TAU:K is max(0, L - K) of the lag L its own filter keeps: zero below the knot, the
+// lag minus the knot above it, at every sample of a ramp through the knot.
+TEST(FeatureTerms, HingeIsTheLagAboveItsKnot) {
+  const auto terms = parse_all({"lag:300", "hinge:300:2", "hinge:300:-1"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(3);
+  double crossed = 0;
+  for (int k = 0; k <= 2000; ++k) {
+    const double delta_t = -3.0 + 0.005 * k;  // -3 .. 7 °C over 2000 s
+    evaluator.push(delta_t, 0.3, k == 0 ? 0.0 : 1.0, values);
+    EXPECT_DOUBLE_EQ(values[1], std::max(0.0, values[0] - 2.0)) << k;
+    EXPECT_DOUBLE_EQ(values[2], std::max(0.0, values[0] + 1.0)) << k;
+    if (values[1] > 0 && crossed == 0) crossed = k;
+  }
+  EXPECT_GT(crossed, 0);  // the lag did cross the upper knot
+}
+
 TEST(FeatureTerms, ProductsAndPowersMultiplyTheAtoms) {
   const auto atoms = parse_all({"lag:300", "rate", "dir:200"});
   const auto products = parse_all({"lag:300^2*rate", "dir:200*lag:300", "rate^3"});
