@@ -22,6 +22,17 @@ struct CompensateArguments {
   DataOptions data;
   std::string model_file;
   std::string out;
+  bool flags = false;
+};
+
+// Bits of the <axis>_flags column.
+constexpr int kFlagNotReady = 1;
+constexpr int kFlagOutsideEnvelope = 2;
+
+// What compensate tells about one axis at the end.
+struct AxisTrust {
+  EnvelopeTally outside;      // ready rows against the training envelope
+  std::size_t not_ready = 0;  // rows in a warm-up
 };
 
 int run_compensate(const CompensateArguments& args) {
@@ -45,12 +56,16 @@ int run_compensate(const CompensateArguments& args) {
   if (reader.has_header()) {
     stream << fmt::format("{}", fmt::join(reader.header(), delimiter));
     for (const auto& axis : model.axes) stream << delimiter << axis.name << "_comp_dph";
+    if (args.flags) {
+      for (const auto& axis : model.axes) stream << delimiter << axis.name << "_flags";
+    }
     stream << '\n';
   }
 
   Compensator compensator(std::move(model));
   const std::size_t axes = compensator.axes();
   std::vector<double> temperatures(inputs);
+  std::vector<AxisTrust> trust(axes);
   LogSample sample;
   double previous_time = std::nan("");
   std::size_t row_index = 0;
@@ -66,12 +81,37 @@ int run_compensate(const CompensateArguments& args) {
     for (std::size_t a = 0; a < axes; ++a) {
       fmt::format_to(std::back_inserter(line), "{}{:.9g}", delimiter, result.compensated[a]);
     }
+    for (std::size_t a = 0; a < axes; ++a) {
+      const auto& status = result.axes[a];
+      if (status.ready) {
+        trust[a].outside.add(status.outside_envelope);
+      } else {
+        ++trust[a].not_ready;
+      }
+      if (args.flags) {
+        const int flags = (status.ready ? 0 : kFlagNotReady) | (status.outside_envelope.any() ? kFlagOutsideEnvelope : 0);
+        fmt::format_to(std::back_inserter(line), "{}{}", delimiter, flags);
+      }
+    }
     line += '\n';
     stream << line;
   }
   reader.finish();
   for (const auto& warning : reader.warnings()) warn(warning);
   out.commit();
+  for (std::size_t a = 0; a < axes; ++a) {
+    const auto& axis = compensator.model().axes[a];
+    const AxisTrust& t = trust[a];
+    if (t.outside.outside == 0 && t.not_ready == 0) continue;
+    std::string message = fmt::format("compensate: {}: ", axis.name);
+    if (t.outside.outside > 0) {
+      message += fmt::format("{} of {} rows outside the training envelope ({}); ", t.outside.outside, row_index,
+                             t.outside.describe(*axis.envelope));
+    }
+    if (t.not_ready > 0) message += fmt::format("{} rows not ready (warm-up); ", t.not_ready);
+    message.resize(message.size() - 2);
+    warn(message);
+  }
   return 0;
 }
 
@@ -83,6 +123,9 @@ Command add_compensate(CLI::App& parent) {
   app->add_option("--model", args->model_file, "model file written by fit")->required()->check(CLI::ExistingFile);
   args->data.add_to(*app);
   app->add_option("--out", args->out, "output CSV")->required();
+  app->add_flag("--flags", args->flags,
+                "append per axis a column <axis>_flags: 0 ok, 1 not ready (warm-up), 2 outside the training "
+                "envelope (bitwise OR)");
   return {app, [args] { return run_compensate(*args); }};
 }
 

@@ -23,13 +23,15 @@ struct EvaluateArguments {
 
 int run_evaluate(const EvaluateArguments& args) {
   const DriftModel model = load_drift_model(args.model_file);
-  std::vector<ResidualMetrics> metrics;
+  std::vector<AxisEvaluation> evaluations;
+  std::vector<ChamberLog> logs;
   if (args.data.format == "libsvm") {
     if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
     const auto& file = args.data.files.front();
-    metrics.push_back(evaluate_libsvm(model, read_libsvm(file), file));
+    evaluations.push_back({evaluate_libsvm(model, read_libsvm(file), file), std::nullopt});
   } else {
-    metrics = evaluate(model, args.data.read(args.data.spec_for(model)), args.settle);
+    logs = args.data.read(args.data.spec_for(model));
+    evaluations = evaluate_axes(model, logs, args.settle);
     double longest = 0;
     for (const auto& axis : model.axes) longest = std::max(longest, axis.pipeline.longest_time_constant());
     if (args.settle == 0 && longest > 0) {
@@ -43,10 +45,24 @@ int run_evaluate(const EvaluateArguments& args) {
                            {"evaluation", "on the given logs (held-out if the model was not fitted on them)"},
                            {"settle_seconds", args.settle}};
   nlohmann::json axes = nlohmann::json::array();
-  for (std::size_t a = 0; a < metrics.size(); ++a) {
-    nlohmann::json entry = metrics[a].to_json();
-    entry["name"] = model.axes[a].name;
-    entry["model"] = model.axes[a].kind;
+  for (std::size_t a = 0; a < evaluations.size(); ++a) {
+    const auto& axis = model.axes[a];
+    nlohmann::json entry = evaluations[a].metrics.to_json();
+    entry["name"] = axis.name;
+    entry["model"] = axis.kind;
+    if (const auto& outside = evaluations[a].outside_envelope) {
+      entry["outside_envelope"] = outside->outside;
+      entry["outside_envelope_fraction"] = outside->outside_fraction();
+      entry["outside_envelope_by_limit"] = {
+          {"temperature", outside->temperature()}, {"rate", outside->rate()}, {"direction", outside->direction()}};
+      if (outside->outside > 0) {
+        warn(fmt::format("{}: {} of {} samples outside the training envelope ({}): the model extrapolates there",
+                         axis.name, outside->outside, outside->samples, outside->describe(*axis.envelope)));
+      }
+    }
+    if (!logs.empty() && axis.pipeline.smooth_seconds > 0) {
+      add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
+    }
     axes.push_back(entry);
   }
   result["axes"] = axes;

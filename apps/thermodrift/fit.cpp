@@ -83,12 +83,13 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   options.tuning_progress = [&](std::size_t axis, const optim::Progress& p) { return progress.tuning(axis, axis_count, p); };
   options.selection_progress = [&](std::size_t axis, const std::string& what) { progress.step(axis, axis_count, what); };
   Calibration calibration;
+  std::vector<ChamberLog> logs;
   if (args.data.format == "libsvm") {
     if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
     calibration = calibrate_libsvm(read_libsvm(args.data.files.front()), args.data.files.front(), options);
   } else {
     const LogSpec spec = args.data.spec();
-    const auto logs = args.data.read(spec);
+    logs = args.data.read(spec);
     axis_count = logs.front().axes();
     calibration = calibrate(logs, spec, options);
   }
@@ -116,6 +117,13 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       entry["tuning"] = {{"method", tuning["method"]}, {"objective", tuning["objective"]},
                          {"objective_mse", tuning["objective_mse"]}, {"optimistic", tuning["optimistic"]},
                          {"seconds", calibration.axes[a].tuning_seconds}};
+    }
+    if (axis.envelope) {
+      entry["training_envelope"] = axis.envelope->to_json();
+      for (const auto& warning : axis.envelope->coverage_warnings()) warn(fmt::format("{}: {}", axis.name, warning));
+    }
+    if (!logs.empty() && axis.pipeline.smooth_seconds > 0) {
+      add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
     }
     axes.push_back(entry);
   }

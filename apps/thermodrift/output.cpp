@@ -4,7 +4,15 @@
 
 #include <cstdio>
 
+#include "thermodrift/features/envelope.hpp"
+
 namespace thermodrift::cli {
+
+void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor) {
+  if (!floor.usable() || !(floor.variance > 0)) return;
+  axis["noise_floor_estimate"] = floor.variance;
+  axis["mse_after_x_floor"] = axis.at("mse_after").get<double>() / floor.variance;
+}
 
 void print_axes(const nlohmann::json& result, bool as_json, const std::string& title) {
   if (as_json) {
@@ -26,6 +34,22 @@ void print_axes(const nlohmann::json& result, bool as_json, const std::string& t
     std::string terms;
     for (const auto& term : axis["terms"]) terms += (terms.empty() ? "" : ", ") + term.get<std::string>();
     fmt::print("{} terms: {}\n", axis.at("name").get<std::string>(), terms);
+  }
+  for (const auto& axis : result.at("axes")) {
+    const auto name = axis.at("name").get<std::string>();
+    if (axis.contains("training_envelope")) {
+      const auto& json = axis["training_envelope"];
+      fmt::print("{} training envelope: {}\n", name, TrainingEnvelope::from_json(json, json.at("terms").size()).brief());
+    }
+    if (axis.contains("noise_floor_estimate")) {
+      fmt::print("{} noise floor (estimate, from the log): {:.4g} (°/h)²; MSE after = {:.3g} × that estimate\n", name,
+                 axis["noise_floor_estimate"].get<double>(), axis["mse_after_x_floor"].get<double>());
+    }
+    if (axis.contains("outside_envelope")) {
+      fmt::print("{} outside the training envelope: {} of {} samples ({:.1f} %)\n", name,
+                 axis["outside_envelope"].get<std::size_t>(), axis.at("samples").get<std::size_t>(),
+                 100 * axis["outside_envelope_fraction"].get<double>());
+    }
   }
 }
 

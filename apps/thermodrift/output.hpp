@@ -5,10 +5,18 @@
 
 #include <string>
 
+#include "thermodrift/features/noise_floor.hpp"
+
 namespace thermodrift::cli {
 
 // `result` holds an "axes" array whose elements carry name, mse_before, mse_after,
 // residual_std, residual_peak_to_peak. Prints it as JSON or as a table under `title`.
+// Sets an axis' "noise_floor_estimate" and "mse_after_x_floor" (its "mse_after" over that
+// estimate) when the estimate is usable; both are estimates and named so.
+void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor);
+
+// `result` holds an "axes" array (see above); the table also shows, where an axis has
+// them, its training envelope, noise-floor estimate and samples outside the envelope.
 void print_axes(const nlohmann::json& result, bool as_json, const std::string& title);
 
 }  // namespace thermodrift::cli

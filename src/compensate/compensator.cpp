@@ -5,7 +5,9 @@
 namespace thermodrift {
 
 Compensator::Compensator(DriftModel model)
-    : model_(std::move(model)), drift_(model_.axes.size()), compensated_(model_.axes.size()) {
+    : model_(std::move(model)), drift_(model_.axes.size()),
+      compensated_(model_.axes.size()),
+      status_(model_.axes.size()) {
   for (const auto& axis : model_.axes) {
     if (axis.pipeline.libsvm) {
       throw UsageError("a model fitted on libsvm-format data has no chamber-log pipeline to compensate with");
@@ -15,6 +17,7 @@ Compensator::Compensator(DriftModel model)
   for (const auto& axis : model_.axes) streams_.emplace_back(axis.pipeline);
   output_.drift = drift_;
   output_.compensated = compensated_;
+  output_.axes = status_;
 }
 
 void Compensator::reset() {
@@ -28,6 +31,11 @@ const Compensator::Output& Compensator::push(double time, std::span<const double
     const auto& sample = streams_[a].push(time, gyro[a], temperatures[a], temperatures);
     drift_[a] = model_.axes[a].predict(sample.features);
     compensated_[a] = gyro[a] - drift_[a];
+    const auto& envelope = model_.axes[a].envelope;
+    status_[a].ready = sample.ready;
+    status_[a].outside_envelope = sample.ready && envelope
+                                      ? envelope->check(sample.smoothed_temperature, sample.smoothed_rate)
+                                      : Excursion{};
     ready = ready && sample.ready;
   }
   output_.ready = ready;

@@ -167,6 +167,7 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
   sample_.smoothed_gyro = gyro_mean_.push(time, gyro);
   const SmoothedChannel::Value own = temperature_.push(time, temperature);
   sample_.smoothed_temperature = own.mean;
+  sample_.smoothed_rate = own.rate;
   for (std::size_t i = 0; i < channels_.size(); ++i) {
     const std::size_t channel = channels_[i];
     if (channel >= channels.size()) {
@@ -208,6 +209,7 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
     table.time.push_back(log.time[i]);
     table.since_start.push_back(sample.since_start);
     table.temperature.push_back(sample.smoothed_temperature);
+    table.rate.push_back(sample.smoothed_rate);
     table.row.push_back(i);
   }
   const auto n = static_cast<Eigen::Index>(table.row.size());
@@ -231,6 +233,7 @@ void append_rows(FeatureTable& table, const FeatureTable& more) {
   table.time.insert(table.time.end(), more.time.begin(), more.time.end());
   table.since_start.insert(table.since_start.end(), more.since_start.begin(), more.since_start.end());
   table.temperature.insert(table.temperature.end(), more.temperature.begin(), more.temperature.end());
+  table.rate.insert(table.rate.end(), more.rate.begin(), more.rate.end());
   table.row.insert(table.row.end(), more.row.begin(), more.row.end());
 }
 

@@ -42,13 +42,15 @@ nlohmann::json to_json(const DriftModel& model) {
   for (const auto& axis : model.axes) {
     const auto terms = axis.pipeline.term_names();
     nlohmann::json body = std::visit([&](const auto& m) { return m.to_json(terms); }, axis.model);
-    axes.push_back({{"name", axis.name},
-                    {"gyro_column", axis.gyro_column},
-                    {"temperature_column", axis.temperature_column},
-                    {"pipeline", axis.pipeline.to_json()},
-                    {"kind", axis.kind},
-                    {"model", body},
-                    {"fit", axis.fit}});
+    nlohmann::json entry = {{"name", axis.name},
+                            {"gyro_column", axis.gyro_column},
+                            {"temperature_column", axis.temperature_column},
+                            {"pipeline", axis.pipeline.to_json()},
+                            {"kind", axis.kind},
+                            {"model", body},
+                            {"fit", axis.fit}};
+    if (axis.envelope) entry["training_envelope"] = axis.envelope->to_json();
+    axes.push_back(std::move(entry));
   }
   nlohmann::json json = {{"format", kFormatName},
                          {"version", DriftModel::kFormatVersion},
@@ -101,6 +103,10 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
           throw Error(fmt::format("unknown model kind '{}'", axis.kind));
         }
         axis.fit = entry.value("fit", nlohmann::json::object());
+        if (entry.contains("training_envelope")) {
+          if (axis.pipeline.libsvm) throw Error("a libsvm-format model has no training envelope");
+          axis.envelope = TrainingEnvelope::from_json(entry.at("training_envelope"), terms.size());
+        }
         const std::size_t inputs = json.at("axes").size() + model.extra_temperature_columns.size();
         for (const std::size_t channel : axis.pipeline.channels()) {
           if (channel >= inputs) {

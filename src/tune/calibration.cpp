@@ -122,6 +122,7 @@ FeatureTable settled_rows(const FeatureTable& table, double settle_seconds) {
     out.time.push_back(table.time[k]);
     out.since_start.push_back(table.since_start[k]);
     out.temperature.push_back(table.temperature[k]);
+    out.rate.push_back(table.rate[k]);
     out.row.push_back(table.row[k]);
   }
   return out;
@@ -341,6 +342,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     AxisCalibration report;
     const FeatureTable every = feature_table(logs, pipeline, axis, false);
     report.in_sample = residual_metrics(every.target, axis_model.predict(every.features));
+    axis_model.envelope = TrainingEnvelope::of(every);
     report.training_samples = training.rows();
     report.tuning_seconds = fitted.tuning_seconds;
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -381,6 +383,13 @@ std::vector<ResidualMetrics> evaluate_from(const DriftModel& model, const Chambe
 std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                       double settle_seconds) {
   std::vector<ResidualMetrics> metrics;
+  for (const auto& axis : evaluate_axes(model, logs, settle_seconds)) metrics.push_back(axis.metrics);
+  return metrics;
+}
+
+std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
+                                          double settle_seconds) {
+  std::vector<AxisEvaluation> evaluations;
   for (std::size_t axis = 0; axis < model.axes.size(); ++axis) {
     const auto& axis_model = model.axes[axis];
     FeatureTable table;
@@ -400,9 +409,12 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
                       fmt::format("no usable samples after the {:g} s warm-up{}", axis_model.pipeline.warm_up_seconds(),
                                   settle_seconds > 0 ? fmt::format(" and {:g} s of settling", settle_seconds) : ""));
     }
-    metrics.push_back(residual_metrics(table.target, axis_model.predict(table.features)));
+    AxisEvaluation evaluation;
+    evaluation.metrics = residual_metrics(table.target, axis_model.predict(table.features));
+    if (axis_model.envelope) evaluation.outside_envelope = tally_outside(*axis_model.envelope, table);
+    evaluations.push_back(evaluation);
   }
-  return metrics;
+  return evaluations;
 }
 
 }  // namespace thermodrift

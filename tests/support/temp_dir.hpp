@@ -97,4 +97,11 @@ inline CommandResult run_in(const TempDir& dir, const std::string& command) {
   return result;
 }
 
+#ifdef THERMODRIFT_BINARY
+// Runs the thermodrift binary under test with `arguments` in `dir`.
+inline CommandResult run_thermodrift(const TempDir& dir, const std::string& arguments) {
+  return run_in(dir, std::string("'") + THERMODRIFT_BINARY + "' " + arguments);
+}
+#endif
+
 }  // namespace thermodrift::testing

@@ -20,10 +20,19 @@ class Compensator {
   std::size_t axes() const { return model_.axes.size(); }
   const DriftModel& model() const { return model_; }
 
+  // How far to trust one axis' output for this sample.
+  struct AxisStatus {
+    bool ready = false;          // false during this axis' warm-up (start or after a gap)
+    // The ready sample against the model's training envelope (features/envelope.hpp);
+    // all false while not ready or when the model file has no envelope.
+    Excursion outside_envelope;
+  };
+
   struct Output {
     std::span<const double> drift;        // predicted drift per axis, °/h
     std::span<const double> compensated;  // gyro - drift per axis, °/h
-    bool ready = false;                   // false during warm-up (start or after a gap)
+    std::span<const AxisStatus> axes;     // per axis
+    bool ready = false;                   // every axis ready
   };
 
   // `gyro` in °/h, one per axis; `temperatures`, one per axis then the model's extra
@@ -38,6 +47,7 @@ class Compensator {
   std::vector<FeatureStream> streams_;
   std::vector<double> drift_;
   std::vector<double> compensated_;
+  std::vector<AxisStatus> status_;
   Output output_;
 };
 

@@ -84,7 +84,8 @@ class FeatureStream {
     bool ready = false;           // false during warm-up (after the start or a gap)
     double since_start = 0;       // s since the stream (re)started: lags settle over this
     double smoothed_gyro = 0;     // °/h, the drift target
-    double smoothed_temperature = 0;
+    double smoothed_temperature = 0;  // °C
+    double smoothed_rate = 0;         // its dT/dt over the rate span, °C/min
     std::span<const double> features;  // one value per pipeline term
   };
 
@@ -117,6 +118,7 @@ struct FeatureTable {
   std::vector<double> time;       // s
   std::vector<double> since_start;  // s since the pipeline (re)started: the log's start or a gap
   std::vector<double> temperature;  // smoothed, °C
+  std::vector<double> rate;         // smoothed dT/dt, °C/min
   std::vector<std::size_t> row;   // index of the log row
   std::size_t rows() const { return row.size(); }
 };

@@ -11,6 +11,7 @@
 #include <variant>
 #include <vector>
 
+#include "thermodrift/features/envelope.hpp"
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/models/linear.hpp"
@@ -26,6 +27,9 @@ struct AxisModel {
   std::string kind;                // "linear", "stepwise" or "svr"
   std::variant<LinearModel, SvrModel> model;
   nlohmann::json fit;              // how it was fitted: parameters, metrics, timings (informational)
+  // What the training logs covered (features/envelope.hpp); absent in files written
+  // before it was recorded and for libsvm-format models.
+  std::optional<TrainingEnvelope> envelope;
 
   // Predicted drift (°/h) for one sample's features (one per pipeline term).
   double predict(std::span<const double> features) const;

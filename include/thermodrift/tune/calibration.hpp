@@ -102,6 +102,13 @@ FeatureTable feature_table(const std::vector<ChamberLog>& logs, const Pipeline& 
 // the lags start there in equilibrium, which a log begun mid-transient is not.
 std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                       double settle_seconds = 0);
+// The same metrics with the count of the samples outside the model's training envelope.
+struct AxisEvaluation {
+  ResidualMetrics metrics;
+  std::optional<EnvelopeTally> outside_envelope;  // when the model file has an envelope
+};
+std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
+                                          double settle_seconds = 0);
 // Metrics on the rows of `log` from `first_row` on, the features streamed from its first
 // row: the held-out part of one continuous log, with filters and lags carried into it
 // as a running compensator carries them (they see temperatures only, never the gyro).

@@ -95,6 +95,51 @@ TEST(ModelFile, SaveAndLoadGiveTheSameModel) {
   EXPECT_EQ(dir.entries(), (std::vector<std::string>{"again.json", "model.json"}));  // no temporary left
 }
 
+TrainingEnvelope heating_only_envelope() {
+  TrainingEnvelope envelope;
+  envelope.temperature = {19.5, 59.875};
+  envelope.rate = {-0.0625, 1.125};
+  envelope.heating_seen = true;
+  envelope.cooling_seen = false;
+  envelope.terms = {{-20.25, 20.125}, {-0.0625, 1.125}};
+  return envelope;
+}
+
+// The training envelope is kept exactly; a file without one (written before it was
+// recorded) still loads, and a present one is checked.
+TEST(ModelFile, TrainingEnvelopeRoundTripsAndIsOptional) {
+  TempDir dir;
+  DriftModel model = two_axis_model();
+  model.axes[0].envelope = heating_only_envelope();
+  const auto path = dir.file("model.json");
+  save_drift_model(model, path);
+  const DriftModel back = load_drift_model(path);
+  ASSERT_TRUE(back.axes[0].envelope);
+  EXPECT_EQ(back.axes[0].envelope->temperature, (Range{19.5, 59.875}));
+  EXPECT_EQ(back.axes[0].envelope->rate, (Range{-0.0625, 1.125}));
+  EXPECT_TRUE(back.axes[0].envelope->heating_seen);
+  EXPECT_FALSE(back.axes[0].envelope->cooling_seen);
+  EXPECT_EQ(back.axes[0].envelope->terms, heating_only_envelope().terms);
+  EXPECT_FALSE(back.axes[1].envelope);  // the older form, without the field
+
+  auto json = nlohmann::json::parse(testing::read_file(path));
+  ASSERT_TRUE(json["axes"][0].contains("training_envelope"));
+  EXPECT_FALSE(json["axes"][1].contains("training_envelope"));
+  const std::vector<std::pair<std::string, nlohmann::json>> bad = {
+      {"min > max", {{"temperature_c", {60.0, 20.0}}}},
+      {"not finite", {{"rate_c_per_min", {-1.0, 1e999}}}},
+      {"term ranges for 2 terms", {{"terms", {{0.0, 1.0}}}}},
+  };
+  for (const auto& [what, patch] : bad) {
+    auto edited = json;
+    edited["axes"][0]["training_envelope"].merge_patch(patch);
+    dir.write("bad.json", edited.dump());
+    const DataError error = load_error(dir.file("bad.json"));
+    EXPECT_TRUE(contains(error.what(), what)) << error.what();
+    EXPECT_TRUE(contains(error.what(), "axis 1")) << error.what();
+  }
+}
+
 TEST(ModelFile, LogSpecReadsLikeTheTrainingLog) {
   const LogSpec spec = two_axis_model().log_spec();
   EXPECT_EQ(spec.gyro_columns, (std::vector<std::string>{"5", "6"}));
