@@ -102,13 +102,21 @@ int run_compensate(const CompensateArguments& args) {
   for (std::size_t a = 0; a < axes; ++a) {
     const auto& axis = compensator.model().axes[a];
     const AxisTrust& t = trust[a];
-    if (t.outside.outside == 0 && t.not_ready == 0) continue;
+    // A warm-up at the start is normal: say so only beside an excursion, or when the
+    // compensator never became ready at all.
+    const bool never_ready = row_index > 0 && t.not_ready == row_index;
+    if (t.outside.outside == 0 && !never_ready) continue;
     std::string message = fmt::format("compensate: {}: ", axis.name);
     if (t.outside.outside > 0) {
       message += fmt::format("{} of {} rows outside the training envelope ({}); ", t.outside.outside, row_index,
                              t.outside.describe(*axis.envelope));
     }
-    if (t.not_ready > 0) message += fmt::format("{} rows not ready (warm-up); ", t.not_ready);
+    if (never_ready) {
+      message += fmt::format("never ready: all {} rows were within the {:g} s warm-up of a start or a gap; ", row_index,
+                             axis.pipeline.warm_up_seconds());
+    } else if (t.not_ready > 0) {
+      message += fmt::format("{} rows not ready (warm-up); ", t.not_ready);
+    }
     message.resize(message.size() - 2);
     warn(message);
   }

@@ -161,5 +161,21 @@ TEST_F(Envelope, CompensateWarnsOfAHotterLogAndFlagsItsRows) {
   EXPECT_TRUE(split_lines(read_file(dir_->file("plain.csv")))[0].ends_with("gyro_z_comp_dph"));
 }
 
+// A log inside the envelope compensates without a word (its warm-up is normal); a log
+// shorter than the warm-up is never ready, and that is said per axis.
+TEST_F(Envelope, CompensateIsQuietInsideTheEnvelopeAndSaysWhenNeverReady) {
+  const auto own = thermodrift(*dir_, "compensate --model full.json --data cycle.csv --out own.csv");
+  ASSERT_EQ(own.status, 0) << own.err;
+  EXPECT_FALSE(contains(own.err, "compensate: ")) << own.err;
+
+  const auto lines = split_lines(read_file(dir_->file("cycle.csv")));
+  std::string head;
+  for (std::size_t i = 0; i < 51 && i < lines.size(); ++i) head += lines[i] + "\n";
+  dir_->write("short.csv", head);
+  const auto short_log = thermodrift(*dir_, "compensate --model full.json --data short.csv --out short_out.csv");
+  ASSERT_EQ(short_log.status, 0) << short_log.err;
+  EXPECT_TRUE(contains(short_log.err, "gyro_x: never ready: all 50 rows")) << short_log.err;
+}
+
 }  // namespace
 }  // namespace thermodrift
