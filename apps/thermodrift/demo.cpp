@@ -33,6 +33,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 int run_demo(const DemoArguments& args) {
   const auto start = std::chrono::steady_clock::now();
   const auto progress = progress_printer("thermodrift demo", start);
+  check_output_folder(args.out);
   std::filesystem::create_directories(args.out);
   sim::SimulatorOptions sim_options;
   sim_options.seed = args.seed;

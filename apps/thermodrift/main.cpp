@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 
@@ -29,6 +30,9 @@ int main(int argc, char** argv) {
     return static_cast<int>(ExitStatus::usage);
   }
   thermodrift::cli::install_interrupt_handler();
+  // A reader that goes away (`| head`, a FIFO closed early) must make a write fail with
+  // EPIPE, reported as one line and exit 1, not kill the process without a word.
+  std::signal(SIGPIPE, SIG_IGN);
   try {
     return thermodrift::cli::run_selected(commands);
   } catch (const thermodrift::Interrupted& e) {

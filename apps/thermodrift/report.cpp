@@ -12,6 +12,7 @@
 #include "data_options.hpp"
 #include "report_command.hpp"
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/report/report.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
@@ -51,6 +52,7 @@ std::vector<std::vector<double>> read_true_drift(const std::string& file, const 
 int run_report(const ReportArguments& args) {
   const auto start = std::chrono::steady_clock::now();
   if (args.data.files.size() != 1) throw UsageError("report reads one log (--data FILE)");
+  check_output_folder(args.out);  // before the log is read and the study run
   const LogSpec spec = args.data.spec();
   const ChamberLog log = args.data.read(spec).front();
   ReportOptions options;

@@ -1,12 +1,17 @@
 #include "thermodrift/io/atomic_file.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <streambuf>
 
 #include "thermodrift/error.hpp"
 
@@ -14,55 +19,195 @@ namespace thermodrift {
 
 namespace fs = std::filesystem;
 
+// Written by hand rather than with std::ofstream so that a failed write keeps its errno
+// (ENOSPC, EPIPE) for the message, and so that the descriptor can be one that was opened
+// without creating or truncating anything (a device, a FIFO, our own stdout).
+class AtomicFile::Descriptor : public std::streambuf {
+ public:
+  explicit Descriptor(int descriptor) : descriptor_(descriptor) { reset_buffer(); }
+  Descriptor(const Descriptor&) = delete;
+  Descriptor& operator=(const Descriptor&) = delete;
+  ~Descriptor() override {
+    if (descriptor_ >= 0) ::close(descriptor_);
+  }
+
+  // Writes what is buffered and closes; returns 0 or the errno of the first failure.
+  int close() {
+    drain();
+    if (descriptor_ >= 0 && ::close(descriptor_) != 0 && error_ == 0) error_ = errno;
+    descriptor_ = -1;
+    return error_;
+  }
+
+ protected:
+  int_type overflow(int_type ch) override {
+    if (!drain()) return traits_type::eof();
+    if (!traits_type::eq_int_type(ch, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(ch);
+      pbump(1);
+    }
+    return traits_type::not_eof(ch);
+  }
+  int sync() override { return drain() ? 0 : -1; }
+
+ private:
+  // After the first failure the rest is dropped: the output is lost either way.
+  bool drain() {
+    for (const char* next = pbase(); error_ == 0 && next < pptr();) {
+      const ssize_t written = ::write(descriptor_, next, static_cast<std::size_t>(pptr() - next));
+      if (written >= 0) {
+        next += written;
+      } else if (errno != EINTR) {
+        error_ = errno;
+      }
+    }
+    reset_buffer();
+    return error_ == 0;
+  }
+  void reset_buffer() { setp(buffer_.data(), buffer_.data() + buffer_.size()); }
+
+  int descriptor_;
+  int error_ = 0;
+  std::array<char, 1 << 16> buffer_{};
+};
+
+namespace {
+
+constexpr int kMaxSymlinks = 40;  // as the kernel's own limit for one path
+
+void refuse_empty(const std::string& path) {
+  if (path.empty()) throw UsageError("the output path is empty; name a file to write");
+}
+
+std::string kind_of(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISREG(mode)) return "a file";
+  return "neither a file nor a device";
+}
+
+int open_in_place(const std::string& path, int flags) {
+  const int descriptor = ::open(path.c_str(), O_WRONLY | O_CLOEXEC | O_NOCTTY | flags);
+  if (descriptor < 0) throw Error(fmt::format("cannot write {}: {}", path, std::strerror(errno)));
+  return descriptor;
+}
+
+// A link in /proc names a file some process holds open; replacing it would leave that
+// process writing to a file nobody can see. Our own descriptor (/dev/stdout) is shared,
+// so that what we print there and what we write here stay in order.
+int open_through_proc(const std::string& path, const fs::path& folder, const fs::path& name) {
+  const std::string own = fmt::format("/proc/{}/fd", ::getpid());
+  const std::string number = name.string();
+  int own_descriptor = -1;
+  const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), own_descriptor);
+  if (folder == own && error == std::errc() && end == number.data() + number.size()) {
+    const int descriptor = ::fcntl(own_descriptor, F_DUPFD_CLOEXEC, 0);
+    if (descriptor < 0) throw Error(fmt::format("cannot write {}: {}", path, std::strerror(errno)));
+    return descriptor;
+  }
+  return open_in_place(path, O_TRUNC);
+}
+
+// Where an output goes: either a file to replace, or a descriptor to write in place.
+struct Destination {
+  std::string replace;  // the regular file (or new name) to rename onto; empty: in place
+  int descriptor = -1;
+};
+
+Destination resolve(const std::string& path) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) == 0) {
+    if (S_ISDIR(status.st_mode)) throw UsageError(fmt::format("output {} is a directory", path));
+    if (S_ISCHR(status.st_mode) || S_ISFIFO(status.st_mode)) return {"", open_in_place(path, 0)};
+    if (!S_ISREG(status.st_mode)) {
+      throw UsageError(fmt::format("output {} is {}; refusing to write to it", path, kind_of(status.st_mode)));
+    }
+  } else if (errno == ELOOP) {
+    throw UsageError(fmt::format("output {}: too many levels of symbolic links", path));
+  }
+  // A regular file or nothing yet: follow the links to the file that is to be replaced.
+  fs::path current = path;
+  for (int links = 0; links <= kMaxSymlinks; ++links) {
+    std::error_code error;
+    const fs::path folder = fs::canonical(current.has_parent_path() ? current.parent_path() : ".", error);
+    if (error) return {current.string()};  // creating the temporary file will say what is wrong
+    current = folder / current.filename();
+    if (folder.string().starts_with("/proc/")) return {"", open_through_proc(path, folder, current.filename())};
+    struct stat link {};
+    if (::lstat(current.c_str(), &link) != 0 || !S_ISLNK(link.st_mode)) return {current.string()};
+    const fs::path next = fs::read_symlink(current, error);
+    if (error) throw Error(fmt::format("cannot read the link {}: {}", current.string(), error.message()));
+    current = next.is_absolute() ? next : folder / next;
+  }
+  throw UsageError(fmt::format("output {}: too many levels of symbolic links", path));
+}
+
+}  // namespace
+
 void refuse_overwriting_inputs(const std::string& output, const std::vector<std::string>& inputs) {
+  struct stat status {};
+  // Reading and writing the same device or pipe is the caller's business; a file is data.
+  if (::stat(output.c_str(), &status) != 0 || !S_ISREG(status.st_mode)) return;
   std::error_code ignored;
   for (const auto& input : inputs) {
-    if (fs::exists(output, ignored) && fs::equivalent(output, input, ignored)) {
+    if (fs::equivalent(output, input, ignored)) {
       throw UsageError(fmt::format("output {} is one of the inputs; refusing to overwrite it", output));
     }
   }
 }
 
+void check_output_folder(const std::string& folder) {
+  if (folder.empty()) throw UsageError("the output folder is empty; name a folder to write");
+  struct stat status {};
+  if (::stat(folder.c_str(), &status) == 0 && !S_ISDIR(status.st_mode)) {
+    throw UsageError(fmt::format("output folder {} is {}", folder, kind_of(status.st_mode)));
+  }
+}
+
 AtomicFile::AtomicFile(std::string path, const std::vector<std::string>& inputs)
-    : path_(std::move(path)) {
+    : path_(std::move(path)), stream_(nullptr) {
+  refuse_empty(path_);
   refuse_overwriting_inputs(path_, inputs);
-  if (fs::is_directory(path_)) throw UsageError(fmt::format("output {} is a directory", path_));
-  const fs::path target(path_);
-  const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::string pattern = (folder / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
-  const int descriptor = ::mkstemp(pattern.data());
-  if (descriptor < 0) {
-    throw Error(fmt::format("cannot write {}: {}", path_, std::strerror(errno)));
+  const Destination destination = resolve(path_);
+  int descriptor = destination.descriptor;
+  if (!destination.replace.empty()) {
+    target_path_ = destination.replace;
+    const fs::path target(target_path_);
+    const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    std::string pattern = (folder / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
+    descriptor = ::mkostemp(pattern.data(), O_CLOEXEC);
+    if (descriptor < 0) throw Error(fmt::format("cannot write {}: {}", path_, std::strerror(errno)));
+    temporary_path_ = pattern;
   }
-  ::close(descriptor);
-  temporary_path_ = pattern;
-  stream_.open(temporary_path_, std::ios::binary | std::ios::trunc);
-  if (!stream_) {
-    std::remove(temporary_path_.c_str());
-    throw Error(fmt::format("cannot write {}", path_));
-  }
+  buffer_ = std::make_unique<Descriptor>(descriptor);
+  stream_.rdbuf(buffer_.get());
 }
 
 AtomicFile::~AtomicFile() {
   if (!committed_) {
-    stream_.close();
-    std::remove(temporary_path_.c_str());
+    buffer_.reset();
+    if (!temporary_path_.empty()) std::remove(temporary_path_.c_str());
   }
 }
 
 void AtomicFile::commit() {
   stream_.flush();
-  stream_.close();
-  if (!stream_) throw Error(fmt::format("writing {} failed (disk full?)", path_));
-  // mkstemp creates 0600; a result file should carry the usual permissions.
-  std::error_code ignored;
-  fs::permissions(temporary_path_,
-                  fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
-                      fs::perms::others_read,
-                  ignored);
-  if (std::rename(temporary_path_.c_str(), path_.c_str()) != 0) {
-    throw Error(fmt::format("cannot move the output into place at {}: {}", path_,
-                            std::strerror(errno)));
+  const int error = buffer_->close();
+  if (error != 0) throw Error(fmt::format("cannot write {}: {}", path_, std::strerror(error)));
+  if (!stream_) throw Error(fmt::format("cannot write {}: the output stream failed", path_));
+  if (!in_place()) {
+    // mkstemp creates 0600; a result file should carry the usual permissions.
+    std::error_code ignored;
+    fs::permissions(temporary_path_,
+                    fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                        fs::perms::others_read,
+                    ignored);
+    if (std::rename(temporary_path_.c_str(), target_path_.c_str()) != 0) {
+      throw Error(fmt::format("cannot move the output into place at {}: {}", path_, std::strerror(errno)));
+    }
   }
   committed_ = true;
 }

@@ -119,7 +119,7 @@ nlohmann::json metrics_cell(const ResidualMetrics& metrics, double floor) {
 
 ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const ReportOptions& options) {
   namespace fs = std::filesystem;
-  if (options.out_dir.empty()) throw UsageError("the report needs an output folder (--out DIR)");
+  check_output_folder(options.out_dir);
   fs::create_directories(options.out_dir);
   const auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);

@@ -1,9 +1,24 @@
-// Output files that appear whole or not at all: written to a temporary file beside the
-// target and renamed into place on commit(), so a failure or an interrupt leaves the old
-// file (or none), never half a file.
+// Output files that appear whole or not at all — and outputs that are not files.
+//
+// The rule for an output path (every `--out` of the CLI goes through it; docs/design.md):
+// - "" is a usage error; so is a directory.
+// - The path is stat()ed, following symlinks. A character device (/dev/null, a terminal)
+//   or a FIFO (a named pipe, `--out /dev/stdout` in a pipeline) is opened and written
+//   directly: its reader gets the bytes, and a failed write (ENOSPC as on /dev/full,
+//   EPIPE) is an Error. Whatever reached it before a failure has reached it.
+// - A block device, a socket or any other kind of file is refused (UsageError).
+// - A regular file, or a name that does not exist yet, is replaced atomically: written to
+//   a temporary file beside it and renamed into place on commit(), so a failure or an
+//   interrupt leaves the old file (or none), never half a file.
+// - A symlink is followed (up to 40 links; a relative link is read against the link's
+//   folder) and its final target is the file replaced — the link stays a link, and a
+//   dangling link gets its target created. Nothing but a regular file is ever renamed over.
+// - A link into /proc (as /dev/stdout, /dev/fd/N are) names a file a process holds open:
+//   it is written through that open file, not replaced.
 #pragma once
 
-#include <fstream>
+#include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -11,9 +26,9 @@ namespace thermodrift {
 
 class AtomicFile {
  public:
-  // Opens a temporary file in the target's folder. Throws UsageError if `path` is one of
-  // `inputs` (an output must never overwrite the data it is made from), Error if the
-  // folder cannot be written.
+  // Opens the output under the rule above. Throws UsageError if `path` is empty, a
+  // directory, a kind of file that is refused, or one of `inputs` (an output must never
+  // overwrite the data it is made from), Error if it cannot be written.
   explicit AtomicFile(std::string path, const std::vector<std::string>& inputs = {});
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
@@ -21,21 +36,32 @@ class AtomicFile {
 
   std::ostream& stream() { return stream_; }
   const std::string& path() const { return path_; }
+  // True when the output is written directly (a device, a pipe), not replaced on commit().
+  bool in_place() const { return temporary_path_.empty(); }
 
-  // Flushes, checks that every write succeeded, and renames into place.
+  // Flushes and closes, throws Error if any write failed, and renames into place.
   void commit();
 
  private:
+  class Descriptor;  // a stream buffer over a file descriptor that keeps the first write error
+
   std::string path_;
-  std::string temporary_path_;
-  std::ofstream stream_;
+  std::string target_path_;     // what commit() renames onto: path_ with its symlinks followed
+  std::string temporary_path_;  // empty when writing in place
+  std::unique_ptr<Descriptor> buffer_;
+  std::ostream stream_;
   bool committed_ = false;
 };
 
-// Throws UsageError if `output` names the same file as one of `inputs`.
+// Throws UsageError if `output` names the same regular file as one of `inputs`, also
+// when one of them is reached through a symlink.
 void refuse_overwriting_inputs(const std::string& output, const std::vector<std::string>& inputs);
 
-// Writes `text` to `path` atomically.
+// Throws UsageError if `folder` is empty or exists as anything but a directory (the
+// folder outputs such as `report --out DIR`; the files in it go through AtomicFile).
+void check_output_folder(const std::string& folder);
+
+// Writes `text` to `path` under the rule above.
 void write_file_atomically(const std::string& path, const std::string& text,
                            const std::vector<std::string>& inputs = {});
 
