@@ -1,0 +1,74 @@
+// Every model file `fit` writes loads: over units drawn from the simulator's law family
+// (development seeds) and every model, `fit --features auto` writes a file that
+// `evaluate` reads and scores, and whose exported C header compiles as C99. A file the
+// tool cannot load is a fit that failed silently. Minutes under the sanitizers: run in the
+// Release pass (label acceptance) only.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "../support/temp_dir.hpp"
+
+namespace thermodrift {
+namespace {
+
+using testing::CommandResult;
+using testing::TempDir;
+
+CommandResult thermodrift(const TempDir& dir, const std::string& arguments) {
+  return testing::run_thermodrift(dir, arguments);
+}
+
+const std::string kColumns = " --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z";
+
+// fit -> evaluate -> export -> compile; every step must succeed and every metric be finite.
+void expect_round_trip(const TempDir& dir, const std::string& log, const std::string& model,
+                       const std::string& fit_options) {
+  SCOPED_TRACE(log + " " + model);
+  const std::string file = log + "." + model + ".json";
+  const auto fit = thermodrift(dir, "fit --data " + log + kColumns + " --model " + model + " --features auto" +
+                                        fit_options + " --out " + file);
+  ASSERT_EQ(fit.status, 0) << fit.err;
+  const auto evaluate = thermodrift(dir, "evaluate --model " + file + " --data " + log + kColumns + " --json");
+  ASSERT_EQ(evaluate.status, 0) << evaluate.err;
+  const auto result = nlohmann::json::parse(evaluate.out);
+  ASSERT_EQ(result["axes"].size(), 3u);
+  for (const auto& axis : result["axes"]) {
+    const double after = axis["mse_after"].get<double>();
+    EXPECT_TRUE(std::isfinite(after)) << axis.dump();
+    EXPECT_LT(after, axis["mse_before"].get<double>()) << "in-sample, a fitted model must beat a constant";
+  }
+  const std::string header = log + "." + model + ".h";
+  const auto exported = thermodrift(dir, "export --model " + file + " --out " + header);
+  ASSERT_EQ(exported.status, 0) << exported.err;
+  dir.write("use_" + model + ".c", "#include \"" + header + "\"\nint main(void) { return 0; }\n");
+  const auto compiled = testing::run_in(dir, "gcc -std=c99 -Wall -Wextra -Werror -pedantic -c use_" + model +
+                                                 ".c -o use_" + model + ".o");
+  EXPECT_EQ(compiled.status, 0) << compiled.err;
+}
+
+TEST(FitAlwaysLoads, LinearAndStepwiseOverDrawnLaws) {
+  TempDir dir;
+  for (const int law : {2, 8, 13}) {
+    const std::string log = "law" + std::to_string(law) + ".csv";
+    const auto simulated =
+        thermodrift(dir, "simulate --law " + std::to_string(law) + " --profile cycle --cycles 1 --out " + log);
+    ASSERT_EQ(simulated.status, 0) << simulated.err;
+    expect_round_trip(dir, log, "linear", "");
+    expect_round_trip(dir, log, "stepwise", "");
+    expect_round_trip(dir, log, "linear", " --identify thermal-node");
+  }
+}
+
+TEST(FitAlwaysLoads, SvrOnADrawnLaw) {
+  TempDir dir;
+  const auto simulated = thermodrift(dir, "simulate --law 5 --profile staircase --cycles 1 --out law5.csv");
+  ASSERT_EQ(simulated.status, 0) << simulated.err;
+  expect_round_trip(dir, "law5.csv", "svr", " --evaluations 6");
+}
+
+}  // namespace
+}  // namespace thermodrift
