@@ -68,6 +68,8 @@ std::pair<std::size_t, std::size_t> factor_cost(const FeatureFactor& factor) {
   switch (factor.atom.kind) {
     case Kind::lag: return {1, 4 + powers};
     case Kind::hinge: return {1, 6 + powers};
+    case Kind::lead: return {0, 3 + powers};
+    case Kind::lead_hinge: return {0, 5 + powers};
     case Kind::lag_rate: return {1, 7 + powers};
     case Kind::gradient_rate: return {2, 14 + powers};
     case Kind::direction: return {factor.atom.tau2 > 0 ? 3 : 2, (factor.atom.tau2 > 0 ? 14 : 9) + powers};
@@ -634,6 +636,10 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  a = ({p}_real){exp}(-step_seconds / tau);\n"
       "  return a * state + (({p}_real)1 - a) * input;\n"
       "}}\n\n"
+      "/* max(0, value): the hinges of a piecewise-linear static map */\n"
+      "static inline {p}_real {p}_positive_part({p}_real value) {{\n"
+      "  return value > 0 ? value : ({p}_real)0;\n"
+      "}}\n\n"
       "/* lagrate:TAU, degC/min: the rate of a TAU-lag of dT (state[0]) */\n"
       "static inline {p}_real {p}_lag_rate({p}_real* lagged, {p}_real delta_t, double step_seconds, double tau) {{\n"
       "  *lagged = {p}_lag(*lagged, delta_t, step_seconds, tau);\n"
@@ -722,6 +728,13 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
                                fmt::arg("p", p), fmt::arg("step", step), fmt::arg("tau", Literal::time(atom.tau)));
             value = fmt::format("({s}[0] > {k} ? {s}[0] - {k} : ({p}_real)0)", fmt::arg("s", state), fmt::arg("p", p),
                                 fmt::arg("k", literal(atom.level)));
+            break;
+          case FeatureAtom::Kind::lead:
+            value = fmt::format("(delta_t + {} * rate / ({}_real)60)", literal(atom.tau), p);
+            break;
+          case FeatureAtom::Kind::lead_hinge:
+            value = fmt::format("{p}_positive_part(delta_t + {tau} * rate / ({p}_real)60 - {k})", fmt::arg("p", p),
+                                fmt::arg("tau", literal(atom.tau)), fmt::arg("k", literal(atom.level)));
             break;
           case FeatureAtom::Kind::lag_rate:
             value = fmt::format("{}_lag_rate(&{}[0], delta_t, {}, {})", p, state, step, Literal::time(atom.tau));

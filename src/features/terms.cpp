@@ -107,11 +107,15 @@ FeatureAtom parse_atom(const std::string& term, std::string_view text) {
     if (parts.size() != 3) bad_term(term, "gradrate takes two time constants, gradrate:TAU:TG, or two channels, gradrate:A-B");
     return {Kind::gradient_rate, parse_time_constant(term, parts[1]), parse_time_constant(term, parts[2])};
   }
-  if (head == "hinge") {
-    if (parts.size() != 3) bad_term(term, "hinge takes a time constant and a knot: hinge:TAU:K");
-    FeatureAtom atom{Kind::hinge, parse_time_constant(term, parts[1])};
+  if (head == "hinge" || head == "leadhinge") {
+    if (parts.size() != 3) bad_term(term, fmt::format("{} takes a time constant and a knot: {}:TAU:K", head, head));
+    FeatureAtom atom{head == "hinge" ? Kind::hinge : Kind::lead_hinge, parse_time_constant(term, parts[1])};
     atom.level = parse_level(term, parts[2]);
     return atom;
+  }
+  if (head == "lead") {
+    if (parts.size() != 2) bad_term(term, "lead takes one time constant: lead:TAU");
+    return {Kind::lead, parse_time_constant(term, parts[1])};
   }
   if (head == "dir") {
     if (parts.size() != 2 && parts.size() != 3) bad_term(term, "dir takes one or two time constants: dir:TAU[:LAG]");
@@ -140,6 +144,8 @@ std::string FeatureAtom::name() const {
     case Kind::channel_gradient: return fmt::format("grad:{}-{}", channel + 1, channel2 + 1);
     case Kind::channel_gradient_rate: return fmt::format("gradrate:{}-{}", channel + 1, channel2 + 1);
     case Kind::hinge: return fmt::format("hinge:{}:{}", tau, level);
+    case Kind::lead: return fmt::format("lead:{}", tau);
+    case Kind::lead_hinge: return fmt::format("leadhinge:{}:{}", tau, level);
   }
   return "?";
 }
@@ -235,6 +241,8 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
     case Kind::hinge:
       state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
       return std::max(0.0, state.first - atom.level);
+    case Kind::lead: return delta_t + atom.tau * inputs.rate / 60.0;
+    case Kind::lead_hinge: return std::max(0.0, delta_t + atom.tau * inputs.rate / 60.0 - atom.level);
     case Kind::direction: {
       double source = inputs.rate;
       if (atom.tau2 > 0) {

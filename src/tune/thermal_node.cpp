@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "thermodrift/error.hpp"
@@ -37,10 +38,16 @@ struct NodeModel {
   double tau = 0;
   std::vector<double> knots;  // °C of ΔT
   std::vector<DynamicTerm> dynamics;
+  bool polynomial = false;  // a cubic instead of the hinges: smoother in τ while the constants are searched
 
   std::vector<std::string> terms() const {
     std::vector<std::string> out = {fmt::format("lag:{}", tau)};
-    for (const double knot : knots) out.push_back(fmt::format("hinge:{}:{}", tau, knot));
+    if (polynomial) {
+      out.push_back(fmt::format("lag:{}^2", tau));
+      out.push_back(fmt::format("lag:{}^3", tau));
+    } else {
+      for (const double knot : knots) out.push_back(fmt::format("hinge:{}:{}", tau, knot));
+    }
     out.push_back(fmt::format("lagrate:{}", tau));
     out.push_back("rate");
     for (const auto& term : dynamics) out.push_back(term.name(tau));
@@ -63,6 +70,25 @@ std::vector<double> spread_knots(const Eigen::VectorXd& delta_t, std::size_t cou
     if (knots.empty() || knot > knots.back() + 0.05) knots.push_back(knot);
   }
   return knots;
+}
+
+// Two terms of one kind whose constants are this close are nearly one column twice: their
+// difference fits noise with large opposite coefficients.
+constexpr double kDistinctRatio = 1.5;
+
+bool distinct(const NodeModel& model) {
+  for (std::size_t i = 0; i < model.dynamics.size(); ++i) {
+    const auto& a = model.dynamics[i];
+    if (a.kind == DynamicTerm::Kind::second_lag &&
+        std::max(a.tau, model.tau) < kDistinctRatio * std::min(a.tau, model.tau)) {
+      return false;
+    }
+    for (std::size_t j = i + 1; j < model.dynamics.size(); ++j) {
+      const auto& b = model.dynamics[j];
+      if (a.kind == b.kind && std::max(a.tau, b.tau) < kDistinctRatio * std::min(a.tau, b.tau)) return false;
+    }
+  }
+  return true;
 }
 
 double training_span_seconds(const std::vector<ChamberLog>& logs) {
@@ -103,6 +129,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
 
   NodeModel best;
   best.knots = spread_knots(cache.matrix({"dT"}).col(0), options.knots);
+  best.polynomial = getenv("POLYSEARCH") != nullptr;
   double best_cv = kInfinity;
   for (const double tau : grid) {
     NodeModel trial = best;
@@ -112,29 +139,44 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   }
   result.path.push_back({"node", fmt::format("lag {} s of {} on the grid", best.tau, grid.size()), best_cv, best.terms()});
 
-  // The node's time constant between grid points: a pattern search in log scale.
-  auto refine_tau = [&](NodeModel& model, double& model_cv) {
-    const double before = model.tau;
+  // Every time constant between grid points (the node's and each dynamic term's): a
+  // coordinate pattern search in log scale while the CV MSE falls.
+  auto refine = [&](NodeModel& model, double& model_cv) {
+    const NodeModel before = model;
+    auto constant = [&](NodeModel& m, std::size_t k) -> double& { return k == 0 ? m.tau : m.dynamics[k - 1].tau; };
     for (const double step : {0.25, 0.125, 0.0625}) {
-      for (bool improved = true; improved;) {
-        improved = false;
-        for (const double factor : {std::pow(2.0, step), std::pow(2.0, -step)}) {
-          NodeModel trial = model;
-          trial.tau = std::round(model.tau * factor);
-          if (trial.tau == model.tau || trial.tau < options.min_time_constant / 2 || trial.tau > longest) continue;
-          const double cv = score(trial);
-          if (cv < model_cv) {
-            model = std::move(trial), model_cv = cv, improved = true;
-            break;
+      for (bool pass_improved = true; pass_improved;) {
+        pass_improved = false;
+        for (std::size_t k = 0; k <= model.dynamics.size(); ++k) {
+          for (bool improved = true; improved;) {
+            improved = false;
+            for (const double factor : {std::pow(2.0, step), std::pow(2.0, -step)}) {
+              NodeModel trial = model;
+              double& tau = constant(trial, k);
+              tau = std::round(tau * factor);
+              if (tau == constant(model, k) || tau < options.min_time_constant / 2 || tau > longest ||
+                  !distinct(trial)) {
+                continue;
+              }
+              const double cv = score(trial);
+              if (cv < model_cv) {
+                model = std::move(trial), model_cv = cv, improved = pass_improved = true;
+                break;
+              }
+            }
           }
         }
       }
     }
-    if (model.tau != before) {
-      result.path.push_back({"tune", fmt::format("{} -> {}", before, model.tau), model_cv, model.terms()});
+    std::string moves;
+    for (std::size_t k = 0; k <= model.dynamics.size(); ++k) {
+      const double from = k == 0 ? before.tau : (k <= before.dynamics.size() ? before.dynamics[k - 1].tau : 0);
+      const double to = k == 0 ? model.tau : model.dynamics[k - 1].tau;
+      if (from != to) moves += fmt::format("{}{} -> {}", moves.empty() ? "" : ", ", from, to);
     }
+    if (!moves.empty()) result.path.push_back({"tune", moves, model_cv, model.terms()});
   };
-  refine_tau(best, best_cv);
+  refine(best, best_cv);
 
   // Dynamic terms, forward: each must cut the CV MSE by more than min_gain.
   std::vector<DynamicTerm> candidates;
@@ -145,22 +187,52 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) candidates.push_back({DynamicTerm::Kind::memory, tau});
   const double keep = 1.0 - options.min_gain;
   while (best.dynamics.size() < options.max_dynamic_terms) {
+    std::vector<std::pair<double, NodeModel>> ranked;
+    auto offer = [&](const std::vector<DynamicTerm>& terms) {
+      NodeModel trial = best;
+      for (const auto& term : terms) {
+        if (std::find(trial.dynamics.begin(), trial.dynamics.end(), term) != trial.dynamics.end()) return;
+        trial.dynamics.push_back(term);
+      }
+      if (trial.dynamics.size() > options.max_dynamic_terms || !distinct(trial)) return;
+      ranked.emplace_back(score(trial), std::move(trial));
+    };
+    for (const auto& candidate : candidates) offer({candidate});
+    // A Shupe term and a memory together: each alone is often beaten by a proxy that
+    // then blocks the pair (the greedy search's lesson, docs/features.md).
+    for (const double tg : {60.0, 120.0, 240.0, 480.0}) {
+      for (const double td : {300.0, 600.0, 1200.0}) {
+        offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td}});
+      }
+    }
+    if (ranked.empty()) break;
+    std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    // The best few are refined before one is chosen: a term often pays only once the
+    // constants it shares have moved.
     NodeModel chosen;
     double chosen_cv = kInfinity;
-    for (const auto& candidate : candidates) {
-      if (std::find(best.dynamics.begin(), best.dynamics.end(), candidate) != best.dynamics.end()) continue;
-      if (candidate.kind == DynamicTerm::Kind::second_lag && candidate.tau == best.tau) continue;
-      NodeModel trial = best;
-      trial.dynamics.push_back(candidate);
-      const double cv = score(trial);
-      if (cv < chosen_cv) chosen_cv = cv, chosen = std::move(trial);
+    const std::size_t silent = result.path.size();
+    for (std::size_t i = 0; i < std::min<std::size_t>(ranked.size(), options.refine_top); ++i) {
+      auto& [cv, trial] = ranked[i];
+      refine(trial, cv);
+      if (cv < chosen_cv) chosen_cv = cv, chosen = trial;
     }
-    if (!(chosen_cv < keep * best_cv)) break;
+    result.path.resize(silent);  // the trials' moves; the chosen one's are in its "add" step
+    const std::size_t added = chosen.dynamics.size() - best.dynamics.size();
+    if (!(chosen_cv < std::pow(keep, static_cast<double>(added)) * best_cv)) break;
+    std::string names;
+    for (std::size_t i = best.dynamics.size(); i < chosen.dynamics.size(); ++i) {
+      names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.tau);
+    }
     best = std::move(chosen), best_cv = chosen_cv;
-    result.path.push_back({"add", best.dynamics.back().name(best.tau), best_cv, best.terms()});
-    refine_tau(best, best_cv);
+    result.path.push_back({"add", names, best_cv, best.terms()});
   }
 
+  if (best.polynomial) {
+    best.polynomial = false;
+    best_cv = score(best);
+    result.path.push_back({"map", "piecewise-linear", best_cv, best.terms()});
+  }
   result.terms = best.terms();
   result.cv_mse = best_cv;
   return result;

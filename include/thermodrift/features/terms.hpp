@@ -19,6 +19,9 @@
 //   hinge:TAU:K      max(0, L - K), L = lag:TAU, K in °C of ΔT: with lag:TAU and several knots K, a
 //                    piecewise-linear static map of the node temperature (linear beyond the last
 //                    knots, so it extrapolates along the slopes it was fitted with)
+//   lead:TAU         ΔT + TAU·rate, °C: a node the sensor lags by TAU (a sensor deeper in the unit
+//                    than the coil: on another axis' block, or on a massive mount)
+//   leadhinge:TAU:K  max(0, lead:TAU - K): the piecewise-linear map of such a node
 //   xN               column N of libsvm-format data, as given (never streamed)
 // A term is one atom or a product of atoms with powers: "dT^2", "dT*rate", "lag:600^2*rate".
 //
@@ -42,7 +45,7 @@ inline constexpr std::size_t kMaxTemperatureChannels = 64;
 
 struct FeatureAtom {
   enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input, channel_gradient,
-                    channel_gradient_rate, hinge };
+                    channel_gradient_rate, hinge, lead, lead_hinge };
   Kind kind = Kind::delta_t;
   double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory)
   double tau2 = 0;              // s: gradrate (gradient lag); dir (lag of its rate, 0: smoothed rate)

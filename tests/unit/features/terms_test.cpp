@@ -23,7 +23,8 @@ std::vector<FeatureTerm> parse_all(const std::vector<std::string>& names) {
 TEST(FeatureTerms, NamesRoundTrip) {
   for (const std::string name : {"dT", "rate", "lag:600", "lagrate:420", "gradrate:420:240", "dir:900",
                                  "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3", "grad:1-4",
-                                 "gradrate:12-3", "grad:2-1*lag:600", "hinge:600:-12.5", "hinge:600:0", "hinge:60:3*rate"}) {
+                                 "gradrate:12-3", "grad:2-1*lag:600", "hinge:600:-12.5", "hinge:600:0", "hinge:60:3*rate", "lead:900",
+                                 "leadhinge:900:-3.5"}) {
     EXPECT_EQ(FeatureTerm::parse(name).name(), name);
   }
   const auto term = FeatureTerm::parse("gradrate:420:240");
@@ -41,7 +42,7 @@ TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
                                 "x0", "x3^2", "x3*dT", "rate:60", "grad", "grad:1", "grad:1-1", "grad:0-2", "grad:1-65",
                                 "grad:a-b", "grad:1-2-3", "gradrate:1-", "grad:1-2:3", "grad:-1-2", "grad:001-2",
                                 "hinge", "hinge:600", "hinge:0:5", "hinge:600:x", "hinge:600:nan", "hinge:600:1e9",
-                                "hinge:600:1:2"}) {
+                                "hinge:600:1:2", "lead", "lead:0", "lead:5:5", "leadhinge:5", "leadhinge:0:1"}) {
     try {
       FeatureTerm::parse(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -147,6 +148,20 @@ TEST(FeatureTerms, HingeIsTheLagAboveItsKnot) {
     if (values[1] > 0 && crossed == 0) crossed = k;
   }
   EXPECT_GT(crossed, 0);  // the lag did cross the upper knot
+}
+
+// lead:TAU undoes a first-order lag: on a ramp r after the transient a sensor lagging by TAU
+// reads r·TAU low, and lead adds exactly that back (rate in °C/min, TAU in s).
+TEST(FeatureTerms, LeadAddsBackTheLagOfARamp) {
+  const auto terms = parse_all({"lead:600", "leadhinge:600:10"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(2);
+  const double rate = 1.5;  // °C/min
+  for (const double delta_t : {-4.0, 2.0, 9.0}) {
+    evaluator.push(delta_t, rate, 1.0, values);
+    EXPECT_DOUBLE_EQ(values[0], delta_t + 600 * rate / 60.0);
+    EXPECT_DOUBLE_EQ(values[1], std::max(0.0, values[0] - 10.0));
+  }
 }
 
 TEST(FeatureTerms, ProductsAndPowersMultiplyTheAtoms) {
