@@ -18,12 +18,39 @@ double Regressor::evaluate(std::span<const double> features) const {
   return value;
 }
 
+namespace {
+
+// A term whose own name holds '*' or '^' (a product or power term) is written in
+// parentheses inside a regressor's name, so that "(lag:600^2)" and "lag:600^2" (the square
+// of lag:600) read back as what they are.
+std::string quoted_term(const std::string& term) {
+  return term.find_first_of("*^") == std::string::npos ? term : "(" + term + ")";
+}
+
+// The factors of a regressor's name split at the '*' outside parentheses.
+std::vector<std::string> top_level_factors(const std::string& text) {
+  std::vector<std::string> factors(1);
+  int depth = 0;
+  for (const char c : text) {
+    if (c == '(') ++depth;
+    if (c == ')') --depth;
+    if (c == '*' && depth == 0) {
+      factors.emplace_back();
+    } else {
+      factors.back() += c;
+    }
+  }
+  return factors;
+}
+
+}  // namespace
+
 std::string Regressor::name(const std::vector<std::string>& term_names) const {
   std::string text;
   for (std::size_t i = 0; i < powers.size(); ++i) {
     if (powers[i] == 0) continue;
     if (!text.empty()) text += '*';
-    text += term_names.at(i);
+    text += quoted_term(term_names.at(i));
     if (powers[i] > 1) text += fmt::format("^{}", powers[i]);
   }
   return text;
@@ -31,11 +58,18 @@ std::string Regressor::name(const std::vector<std::string>& term_names) const {
 
 Regressor Regressor::parse(const std::string& text, const std::vector<std::string>& term_names) {
   Regressor regressor{std::vector<int>(term_names.size(), 0)};
-  std::stringstream factors(text);
-  std::string factor;
-  while (std::getline(factors, factor, '*')) {
+  // A regressor that is one whole term (as files written before terms were parenthesized
+  // name a product or power term).
+  for (std::size_t i = 0; i < term_names.size(); ++i) {
+    if (term_names[i] == text) {
+      regressor.powers[i] = 1;
+      return regressor;
+    }
+  }
+  for (std::string factor : top_level_factors(text)) {
     int power = 1;
-    if (const auto caret = factor.find('^'); caret != std::string::npos) {
+    const auto close = factor.rfind(')');
+    if (const auto caret = factor.rfind('^'); caret != std::string::npos && (close == std::string::npos || caret > close)) {
       try {
         power = std::stoi(factor.substr(caret + 1));
       } catch (const std::exception&) {
@@ -44,6 +78,7 @@ Regressor Regressor::parse(const std::string& text, const std::vector<std::strin
       if (power < 1 || power > 9) throw UsageError(fmt::format("bad power in regressor '{}'", text));
       factor.resize(caret);
     }
+    if (factor.size() >= 2 && factor.front() == '(' && factor.back() == ')') factor = factor.substr(1, factor.size() - 2);
     bool known = false;
     for (std::size_t i = 0; i < term_names.size(); ++i) {
       if (term_names[i] == factor) {

@@ -241,6 +241,21 @@ TEST(Regressor, NamesParseBack) {
   EXPECT_THROW(Regressor::parse("dT^0", names), UsageError);
 }
 
+// Terms that are themselves powers or products: a model whose term is lag:600^2 but not
+// lag:600 was written as "lag:600^2" and refused on load ("names unknown term 'lag:600'").
+// Such terms are parenthesized inside regressor names and read back to the same powers.
+TEST(Regressor, ProductAndPowerTermsParseBack) {
+  const std::vector<std::string> names = {"lag:600^2", "dT*rate", "rate", "hinge:420:-3^2*rate"};
+  for (const auto& regressor : quadratic_regressors(names.size())) {
+    EXPECT_EQ(Regressor::parse(regressor.name(names), names).powers, regressor.powers) << regressor.name(names);
+  }
+  EXPECT_EQ(linear_regressors(4)[0].name(names), "(lag:600^2)");
+  EXPECT_EQ(Regressor::parse("(lag:600^2)^2*(dT*rate)", names).powers, (std::vector<int>{2, 1, 0, 0}));
+  // Files written before the parentheses: a whole term still reads as that term.
+  EXPECT_EQ(Regressor::parse("lag:600^2", names).powers, (std::vector<int>{1, 0, 0, 0}));
+  EXPECT_THROW(Regressor::parse("lag:600^3", names), UsageError);
+}
+
 TEST(LinearModelJson, RoundTrips) {
   const Problem problem = chamber_like(200, 7);
   const std::vector<std::string> names = {"dT", "rate"};
