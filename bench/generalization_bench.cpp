@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -268,36 +269,53 @@ int main(int argc, char** argv) {
   std::vector<LawResult> laws(args.seeds.size());
   std::vector<char> finished(args.seeds.size(), 0);
   std::atomic<std::size_t> next{0};
-  std::mutex report_mutex;
+  std::mutex mutex;  // guards laws, finished, running and stderr
+  std::condition_variable changed;
+  const int worker_count = std::min<int>(args.threads, static_cast<int>(args.seeds.size()));
+  int running = worker_count;
   auto work = [&] {
     while (!interrupted.load()) {
       const std::size_t k = next.fetch_add(1);
       if (k >= args.seeds.size()) break;
       LawResult law = run_law(args.seeds[k], args);
-      std::lock_guard lock(report_mutex);
+      std::lock_guard lock(mutex);
       if (interrupted.load()) break;
       fmt::print(stderr, "{}\n", progress_line(law));
       laws[k] = std::move(law);
       finished[k] = 1;
     }
+    std::lock_guard lock(mutex);
+    --running;
+    changed.notify_all();
   };
   std::vector<std::thread> workers;
-  for (int t = 0; t < std::min<int>(args.threads, static_cast<int>(args.seeds.size())); ++t) workers.emplace_back(work);
-  for (auto& worker : workers) worker.join();
+  for (int t = 0; t < worker_count; ++t) workers.emplace_back(work);
+  // Ctrl-C is answered from here within 0.1 s: a law's feature search takes no stop
+  // callback, so the workers are not waited for; the laws finished so far are reported.
+  std::unique_lock lock(mutex);
+  while (running > 0 && !interrupted.load()) changed.wait_for(lock, std::chrono::milliseconds(100));
+  const bool stopped = interrupted.load();
 
   std::vector<LawResult> done;
   for (std::size_t k = 0; k < laws.size(); ++k) {
-    if (finished[k]) done.push_back(std::move(laws[k]));
+    if (finished[k]) done.push_back(laws[k]);
   }
-  if (interrupted.load()) fmt::print("interrupted: {} of {} laws finished\n\n", done.size(), args.seeds.size());
+  if (stopped) fmt::print("interrupted: {} of {} laws finished\n\n", done.size(), args.seeds.size());
   fmt::print("{}", summary_table(done, args.methods));
   if (!args.json.empty()) {
     nlohmann::json out = {{"seeds", args.seed_list},
                           {"settle_s", settle_s},
                           {"smoothing_s", smoothing_s},
                           {"evaluations", args.evaluations},
+                          {"interrupted", stopped},
                           {"laws", laws_json(done)}};
     write_file_atomically(args.json, out.dump(1) + "\n");
   }
-  return interrupted.load() ? 130 : 0;
+  if (stopped) {
+    std::fflush(stdout);
+    std::_Exit(130);  // the workers still hold their laws; nothing of theirs is reported
+  }
+  lock.unlock();
+  for (auto& worker : workers) worker.join();
+  return 0;
 }
