@@ -271,7 +271,7 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
 
-  fmt::print("generalization_bench: {} law(s) of the {} seeds, methods {}, AFSA budget {}, {} thread(s)\n",
+  fmt::print("generalization_bench: {} law(s) (--seeds {}), methods {}, AFSA budget {}, {} thread(s)\n",
              args.seeds.size(), args.seed_list, method_list(args.methods), args.evaluations, args.threads);
   fmt::print("train: cycle 1 of a two-cycle `cycle` programme; tests: cycle 2 (next cycle) and two other "
              "profiles (new runs of the unit); settle {:g} s; ratio = held-out MSE / true noise floor ({:g} s smoothing)\n\n",
