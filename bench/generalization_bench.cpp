@@ -76,6 +76,7 @@ struct Arguments {
   int threads = 2;
   long evaluations = SvrTuningOptions{}.evaluations;
   std::string json;
+  FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;  // --features auto's search
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -95,7 +96,8 @@ Arguments parse(int argc, char** argv) {
     const std::string flag = argv[i];
     if (i + 1 >= argc) {
       fmt::print(stderr, "usage: {} [--seeds acceptance|development|S,S,...] [--limit N] [--methods "
-                         "paper,linear,stepwise,svr] [--threads N] [--evaluations N] [--json FILE]\n", argv[0]);
+                         "paper,linear,stepwise,svr] [--threads N] [--evaluations N] [--identify greedy|thermal-node] "
+                         "[--json FILE]\n", argv[0]);
       std::exit(2);
     }
     const std::string value = argv[++i];
@@ -104,6 +106,10 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--threads") args.threads = std::max(1, std::stoi(value));
     else if (flag == "--evaluations") args.evaluations = std::stol(value);
     else if (flag == "--json") args.json = value;
+    else if (flag == "--identify" && (value == "greedy" || value == "thermal-node")) {
+      args.identify = value == "greedy" ? FeatureSelectionOptions::Method::greedy
+                                        : FeatureSelectionOptions::Method::thermal_node;
+    }
     else if (flag == "--methods") {
       args.methods.clear();
       for (const auto& name : split(value)) args.methods.push_back(parse_method(name));
@@ -222,6 +228,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     result.method = method;
     try {
       CalibrationOptions options = fit_options(method, args.evaluations);
+      options.selection.method = args.identify;
       if (chooses_features(options)) {
         if (selections.empty()) {
           const Stopwatch search_clock;

@@ -231,6 +231,15 @@ ModelSize model_size(const DriftModel& model, bool single_precision) {
       // un-standardize (2)
       axis.flops_per_sample += 2 * d + sv * (3 * d + 3) + 2;
       axis.exp_per_sample += sv;
+      if (svr->linear_part) {
+        const auto& regressors = svr->linear_part->regressors;
+        axis.regressors = regressors.size();
+        axis.constant_bytes += (regressors.size() + 1) * real + regressors.size() * d;
+        for (const auto& regressor : regressors) {
+          axis.flops_per_sample +=
+              static_cast<std::size_t>(std::accumulate(regressor.powers.begin(), regressor.powers.end(), 0)) + 2;
+        }
+      }
     } else if (const auto* linear = std::get_if<LinearModel>(&axis_model.model)) {
       axis.regressors = linear->regressors.size();
       axis.constant_bytes += (axis.regressors + 1) * real + axis.regressors * d;  // powers as bytes
@@ -412,6 +421,41 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
         fmt::arg("p", p));
   }
 
+  // A least-squares model as a C function of the features: `prefix` names its arrays.
+  auto emit_linear = [&](const LinearModel& linear, const std::string& name, const std::string& function_name,
+                         std::size_t d) {
+    const std::size_t k_count = linear.regressors.size();
+    if (k_count > 0) {
+      out += fmt::format("static const {}_real {}_coefficients[{}] = {{", p, name, k_count);
+      append_array(out, literal, linear.coefficients.data(), k_count);
+      out += "};\n";
+      out += fmt::format("/* regressor k = product over terms i of features[i]^powers[k][i] */\n"
+                         "static const unsigned char {}_powers[{}][{}] = {{",
+                         name, k_count, d);
+      for (std::size_t k = 0; k < k_count; ++k) {
+        out += fmt::format("\n    {{{}}}{}", fmt::join(linear.regressors[k].powers, ", "), k + 1 < k_count ? "," : "");
+      }
+      out += "};\n";
+    }
+    out += fmt::format("static inline {}_real {}(const {}_real features[{}]) {{\n", p, function_name, p, d);
+    out += fmt::format("  {}_real value = {};\n", p, literal(linear.intercept));
+    if (k_count > 0) {
+      out += fmt::format(
+          "  int k, i, power;\n"
+          "  for (k = 0; k < {k}; ++k) {{\n"
+          "    {p}_real regressor = 1;\n"
+          "    for (i = 0; i < {d}; ++i) {{\n"
+          "      for (power = 0; power < {name}_powers[k][i]; ++power) regressor *= features[i];\n"
+          "    }}\n"
+          "    value += {name}_coefficients[k] * regressor;\n"
+          "  }}\n",
+          fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("k", k_count));
+    } else {
+      out += "  (void)features;\n";
+    }
+    out += "  return value;\n}\n\n";
+  };
+
   // One drift function per axis: the model's prediction, term for term as in C++.
   for (std::size_t a = 0; a < axes; ++a) {
     const AxisModel& axis = model.axes[a];
@@ -420,6 +464,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
     out += fmt::format("/* Axis {}: {} ({} model; terms {}). */\n", a, comment_safe(axis.name), axis.kind,
                        fmt::join(axis.pipeline.term_names(), ", "));
     if (const auto* svr = std::get_if<SvrModel>(&axis.model)) {
+      if (svr->linear_part) emit_linear(*svr->linear_part, name + "_linear", name + "_linear_part", d);
       const auto& function = svr->function;
       const auto sv = static_cast<std::size_t>(function.support_vectors.rows());
       out += fmt::format("static const {}_real {}_feature_mean[{}] = {{", p, name, d);
@@ -470,40 +515,11 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
                      accumulate("sum", "carry", fmt::format("{}_coefficients[k] * {}(-{} * squared)", name, exp_name,
                                                             literal(function.gamma)))));
       }
-      out += fmt::format("  return sum * {} + {};\n}}\n\n", literal(svr->scaling.target_scale),
-                         literal(svr->scaling.target_mean));
+      out += fmt::format("  return sum * {} + {}{};\n}}\n\n", literal(svr->scaling.target_scale),
+                         literal(svr->scaling.target_mean),
+                         svr->linear_part ? fmt::format(" + {}_linear_part(features)", name) : std::string());
     } else {
-      const auto& linear = std::get<LinearModel>(axis.model);
-      const std::size_t k_count = linear.regressors.size();
-      if (k_count > 0) {
-        out += fmt::format("static const {}_real {}_coefficients[{}] = {{", p, name, k_count);
-        append_array(out, literal, linear.coefficients.data(), k_count);
-        out += "};\n";
-        out += fmt::format("/* regressor k = product over terms i of features[i]^powers[k][i] */\n"
-                           "static const unsigned char {}_powers[{}][{}] = {{",
-                           name, k_count, d);
-        for (std::size_t k = 0; k < k_count; ++k) {
-          out += fmt::format("\n    {{{}}}{}", fmt::join(linear.regressors[k].powers, ", "), k + 1 < k_count ? "," : "");
-        }
-        out += "};\n";
-      }
-      out += fmt::format("static inline {}_real {}_drift(const {}_real features[{}]) {{\n", p, name, p, d);
-      out += fmt::format("  {}_real value = {};\n", p, literal(linear.intercept));
-      if (k_count > 0) {
-        out += fmt::format(
-            "  int k, i, power;\n"
-            "  for (k = 0; k < {k}; ++k) {{\n"
-            "    {p}_real regressor = 1;\n"
-            "    for (i = 0; i < {d}; ++i) {{\n"
-            "      for (power = 0; power < {name}_powers[k][i]; ++power) regressor *= features[i];\n"
-            "    }}\n"
-            "    value += {name}_coefficients[k] * regressor;\n"
-            "  }}\n",
-            fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("k", k_count));
-      } else {
-        out += "  (void)features;\n";
-      }
-      out += "  return value;\n}\n\n";
+      emit_linear(std::get<LinearModel>(axis.model), name, name + "_drift", d);
     }
   }
 

@@ -55,13 +55,15 @@ double SvrModel::predict(std::span<const double> features) const {
     const auto k = static_cast<Eigen::Index>(j);
     x[j] = (features[j] - scaling.feature_mean(k)) / scaling.feature_scale(k);
   }
-  return function(x) * scaling.target_scale + scaling.target_mean;
+  const double kernel_part = function(x) * scaling.target_scale + scaling.target_mean;
+  return linear_part ? kernel_part + linear_part->predict(features) : kernel_part;
 }
 
 Eigen::VectorXd SvrModel::predict(const Eigen::MatrixXd& features) const {
-  return (function.predict(scaling.features(features)).array() * scaling.target_scale +
-          scaling.target_mean)
-      .matrix();
+  Eigen::VectorXd kernel_part =
+      (function.predict(scaling.features(features)).array() * scaling.target_scale + scaling.target_mean).matrix();
+  if (linear_part) kernel_part += linear_part->predict(features);
+  return kernel_part;
 }
 
 namespace {
@@ -83,7 +85,7 @@ nlohmann::json SvrModel::to_json(const std::vector<std::string>& term_names) con
   for (Eigen::Index i = 0; i < function.support_vectors.rows(); ++i) {
     support_vectors.push_back(as_vector(function.support_vectors.row(i).transpose()));
   }
-  return {{"terms", term_names},
+  nlohmann::json json = {{"terms", term_names},
           {"feature_mean", as_vector(scaling.feature_mean)},
           {"feature_scale", as_vector(scaling.feature_scale)},
           {"target_mean", scaling.target_mean},
@@ -97,6 +99,8 @@ nlohmann::json SvrModel::to_json(const std::vector<std::string>& term_names) con
           {"bias", function.bias},
           {"coefficients", as_vector(function.coefficients)},
           {"support_vectors", support_vectors}};
+  if (linear_part) json["linear_part"] = linear_part->to_json(term_names);
+  return json;
 }
 
 SvrModel SvrModel::from_json(const nlohmann::json& json, const std::vector<std::string>& term_names) {
@@ -129,6 +133,7 @@ SvrModel SvrModel::from_json(const nlohmann::json& json, const std::vector<std::
     model.function.support_vectors.row(static_cast<Eigen::Index>(i)) =
         as_eigen(support_vectors[i], d, "support vector").transpose();
   }
+  if (json.contains("linear_part")) model.linear_part = LinearModel::from_json(json.at("linear_part"), term_names);
   return model;
 }
 

@@ -178,10 +178,16 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     fitted.model = std::move(stepwise.model);
   } else if (options.model == "svr") {
     SvrModel svr;
-    svr.scaling = standardize ? Standardization::of(features, target)
+    Eigen::VectorXd kernel_target = target;
+    if (options.partially_linear) {
+      svr.linear_part = fit_least_squares(features, target, linear_regressors(static_cast<std::size_t>(features.cols())));
+      kernel_target -= svr.linear_part->predict(features);
+      fitted.fit["partially_linear"] = true;
+    }
+    svr.scaling = standardize ? Standardization::of(features, kernel_target)
                               : Standardization::identity(features.cols());
     const Eigen::MatrixXd scaled_features = svr.scaling.features(features);
-    const Eigen::VectorXd scaled_target = svr.scaling.target(target);
+    const Eigen::VectorXd scaled_target = svr.scaling.target(kernel_target);
     SvrOptions solver = options.svr;
     long evaluations = 1;
     if (options.tuning) {
@@ -319,11 +325,6 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
         judge.min_gain = selection_options.min_gain;
         judge_by_svr(selection, logs, axis, axis_model.pipeline, judge);
       }
-      if (options.model == "svr" && selection_options.method == FeatureSelectionOptions::Method::thermal_node) {
-        // The RBF kernel is itself a flexible map of the node's temperature: the hinges
-        // that give least squares one would only distort its distances.
-        std::erase_if(selection.terms, [](const std::string& term) { return term.starts_with("hinge:"); });
-      }
       axis_model.pipeline.terms.clear();
       for (const auto& term : selection.terms) axis_model.pipeline.terms.push_back(FeatureTerm::parse(term));
       axis_model.pipeline.validate();
@@ -333,8 +334,12 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
 
     const FeatureTable training = feature_table(logs, pipeline, axis, true);
     require_samples(training, pipeline, logs, minimum_samples(options.model, pipeline.terms.size()));
+    CalibrationOptions axis_options = options;
+    axis_options.partially_linear = options.partially_linear ||
+                                    (chooses_features(options) &&
+                                     options.selection.method == FeatureSelectionOptions::Method::thermal_node);
     FittedModel fitted =
-        fit_model(training.features, training.target, pipeline.term_names(), options, true, axis);
+        fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis);
     axis_model.model = std::move(fitted.model);
     nlohmann::json fit = std::move(fitted.fit);
     if (!selection_json.is_null()) fit["feature_selection"] = std::move(selection_json);

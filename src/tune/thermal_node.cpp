@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 
 #include "thermodrift/error.hpp"
@@ -20,37 +19,45 @@ struct DynamicTerm {
   enum class Kind { gradient_rate, memory, second_lag } kind;
   double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ
 
-  std::string name(double node_tau) const {
+  // `lead`: the node leads the sensor, and memories follow the sensor's own rate.
+  std::string name(double node_tau, bool lead) const {
     switch (kind) {
       case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", node_tau, tau);
-      case Kind::memory: return fmt::format("dir:{}:{}", tau, node_tau);
+      case Kind::memory: return lead ? fmt::format("dir:{}", tau) : fmt::format("dir:{}:{}", tau, node_tau);
       case Kind::second_lag: return fmt::format("lag:{}", tau);
     }
     return {};
   }
+  // The longest constant a term of this kind may take, s: memories and gradient lags
+  // beyond these follow the log's own course more than any physics.
+  double longest() const {
+    switch (kind) {
+      case Kind::gradient_rate: return 1920;
+      case Kind::memory: return 3000;
+      case Kind::second_lag: return 1200;
+    }
+    return 0;
+  }
   bool operator==(const DynamicTerm&) const = default;
 };
 
-// One thermal node behind the axis' sensor: its temperature L (a lag τ of the smoothed
-// ΔT) through a piecewise-linear static map (L and hinges at fixed knots), its rate, the
-// sensor's own rate, and dynamic terms linear in the node's state.
+// One thermal node behind the axis' sensor (or, for a sensor deeper in the unit, ahead of
+// it): its temperature L (a lag τ of the smoothed ΔT, or ΔT + τ·rate) through a
+// piecewise-linear static map (L and hinges at fixed knots), its rate, the sensor's own
+// rate, and dynamic terms linear in the node's state.
 struct NodeModel {
   double tau = 0;
   std::vector<double> knots;  // °C of ΔT
   std::vector<DynamicTerm> dynamics;
-  bool polynomial = false;  // a cubic instead of the hinges: smoother in τ while the constants are searched
+  bool lead = false;  // the node leads the sensor (lead:τ) instead of lagging it (lag:τ)
 
   std::vector<std::string> terms() const {
-    std::vector<std::string> out = {fmt::format("lag:{}", tau)};
-    if (polynomial) {
-      out.push_back(fmt::format("lag:{}^2", tau));
-      out.push_back(fmt::format("lag:{}^3", tau));
-    } else {
-      for (const double knot : knots) out.push_back(fmt::format("hinge:{}:{}", tau, knot));
-    }
-    out.push_back(fmt::format("lagrate:{}", tau));
+    const char* node = lead ? "lead" : "lag";
+    std::vector<std::string> out = {fmt::format("{}:{}", node, tau)};
+    for (const double knot : knots) out.push_back(fmt::format("{}:{}:{}", lead ? "leadhinge" : "hinge", tau, knot));
+    if (!lead) out.push_back(fmt::format("lagrate:{}", tau));
     out.push_back("rate");
-    for (const auto& term : dynamics) out.push_back(term.name(tau));
+    for (const auto& term : dynamics) out.push_back(term.name(tau, lead));
     return out;
   }
 };
@@ -72,20 +79,22 @@ std::vector<double> spread_knots(const Eigen::VectorXd& delta_t, std::size_t cou
   return knots;
 }
 
-// Two terms of one kind whose constants are this close are nearly one column twice: their
-// difference fits noise with large opposite coefficients.
+// A second lag this close to the node's is nearly the same column twice: their difference
+// fits noise with large opposite coefficients. Two terms of one kind do the same, so a
+// model has at most one of each: one Shupe term, one memory, one second node.
 constexpr double kDistinctRatio = 1.5;
 
 bool distinct(const NodeModel& model) {
   for (std::size_t i = 0; i < model.dynamics.size(); ++i) {
     const auto& a = model.dynamics[i];
+    if (a.tau > a.longest()) return false;
     if (a.kind == DynamicTerm::Kind::second_lag &&
         std::max(a.tau, model.tau) < kDistinctRatio * std::min(a.tau, model.tau)) {
       return false;
     }
     for (std::size_t j = i + 1; j < model.dynamics.size(); ++j) {
       const auto& b = model.dynamics[j];
-      if (a.kind == b.kind && std::max(a.tau, b.tau) < kDistinctRatio * std::min(a.tau, b.tau)) return false;
+      if (a.kind == b.kind) return false;  // one Shupe term, one memory, one second node
     }
   }
   return true;
@@ -129,15 +138,22 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
 
   NodeModel best;
   best.knots = spread_knots(cache.matrix({"dT"}).col(0), options.knots);
-  best.polynomial = getenv("POLYSEARCH") != nullptr;
+  // A lagging node first; a leading one only when it is clearly better: its argument moves
+  // with the rate, so on a faster programme its static map is read where it was never
+  // fitted, while a lag stays within the temperatures the log visited.
   double best_cv = kInfinity;
-  for (const double tau : grid) {
-    NodeModel trial = best;
-    trial.tau = tau;
-    const double cv = score(trial);
-    if (cv < best_cv) best_cv = cv, best.tau = tau;
+  const double lead_advantage = (1.0 - options.min_gain) * (1.0 - options.min_gain);
+  for (const bool lead : {false, true}) {
+    for (const double tau : grid) {
+      NodeModel trial = best;
+      trial.tau = tau;
+      trial.lead = lead;
+      const double cv = score(trial);
+      if (cv < (lead ? lead_advantage : 1.0) * best_cv) best_cv = cv, best.tau = tau, best.lead = lead;
+    }
   }
-  result.path.push_back({"node", fmt::format("lag {} s of {} on the grid", best.tau, grid.size()), best_cv, best.terms()});
+  result.path.push_back({"node", fmt::format("{} {} s of {} on the grid", best.lead ? "lead" : "lag", best.tau, grid.size()),
+                         best_cv, best.terms()});
 
   // Every time constant between grid points (the node's and each dynamic term's): a
   // coordinate pattern search in log scale while the CV MSE falls.
@@ -182,7 +198,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   std::vector<DynamicTerm> candidates;
   for (const double tau : grid) {
     if (tau <= 1920) candidates.push_back({DynamicTerm::Kind::gradient_rate, tau});
-    if (tau <= options.max_second_lag) candidates.push_back({DynamicTerm::Kind::second_lag, tau});
+    if (tau <= 1200) candidates.push_back({DynamicTerm::Kind::second_lag, tau});
   }
   for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) candidates.push_back({DynamicTerm::Kind::memory, tau});
   const double keep = 1.0 - options.min_gain;
@@ -197,12 +213,14 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       if (trial.dynamics.size() > options.max_dynamic_terms || !distinct(trial)) return;
       ranked.emplace_back(score(trial), std::move(trial));
     };
-    for (const auto& candidate : candidates) offer({candidate});
+    for (const auto& candidate : candidates) {
+    if (!(best.lead && candidate.kind == DynamicTerm::Kind::gradient_rate)) offer({candidate});
+  }
     // A Shupe term and a memory together: each alone is often beaten by a proxy that
     // then blocks the pair (the greedy search's lesson, docs/features.md).
     for (const double tg : {60.0, 120.0, 240.0, 480.0}) {
       for (const double td : {300.0, 600.0, 1200.0}) {
-        offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td}});
+        if (!best.lead) offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td}});
       }
     }
     if (ranked.empty()) break;
@@ -222,17 +240,12 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     if (!(chosen_cv < std::pow(keep, static_cast<double>(added)) * best_cv)) break;
     std::string names;
     for (std::size_t i = best.dynamics.size(); i < chosen.dynamics.size(); ++i) {
-      names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.tau);
+      names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.tau, chosen.lead);
     }
     best = std::move(chosen), best_cv = chosen_cv;
     result.path.push_back({"add", names, best_cv, best.terms()});
   }
 
-  if (best.polynomial) {
-    best.polynomial = false;
-    best_cv = score(best);
-    result.path.push_back({"map", "piecewise-linear", best_cv, best.terms()});
-  }
   result.terms = best.terms();
   result.cv_mse = best_cv;
   return result;

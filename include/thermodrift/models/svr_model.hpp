@@ -5,12 +5,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include <Eigen/Dense>
 
+#include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/svr.hpp"
 
 namespace thermodrift {
@@ -35,6 +37,10 @@ struct SvrModel {
   double C = 0;                  // hyper-parameters it was trained with (informational)
   double epsilon = 0;            // in standardized target units
   bool converged = true;
+  // Partially linear: a least-squares part in the raw features, the RBF SVR fitted to its
+  // residual. The linear part carries what must extrapolate (rates and memories of other
+  // programmes); the kernel, which reverts to its mean away from its data, only corrects.
+  std::optional<LinearModel> linear_part;
 
   double sigma() const;  // RBF width in standardized feature units: gamma = 1/(2 sigma²)
   double predict(std::span<const double> features) const;

@@ -33,6 +33,9 @@ struct CalibrationOptions {
   // fitting several models shares one search); empty: calibrate searches.
   std::vector<FeatureSelection> selections;
   FeatureSelectionOptions selection;       // how terms {"auto"} are identified
+  // svr: least squares on the terms, the SVR on its residual (SvrModel::linear_part). Set
+  // by calibrate with --identify thermal-node, whose terms are built for a linear fit.
+  bool partially_linear = false;
   // A line of progress of axis `axis` outside tuning (feature selection); may be empty.
   std::function<void(std::size_t axis, const std::string&)> selection_progress;
 };

@@ -73,10 +73,16 @@ DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const st
       axis.model = fit_least_squares(table.features, table.target,
                                      terms.empty() ? quadratic_regressors(2) : linear_regressors(terms.size()));
     } else {
+      // "svr", or "partially_linear": least squares on the terms, the SVR on its residual.
       SvrModel svr;
-      svr.scaling = Standardization::of(table.features, table.target);
+      Eigen::VectorXd target = table.target;
+      if (kind == "partially_linear") {
+        svr.linear_part = fit_least_squares(table.features, table.target, linear_regressors(axis.pipeline.terms.size()));
+        target -= svr.linear_part->predict(table.features);
+      }
+      svr.scaling = Standardization::of(table.features, target);
       SvrTrainer trainer(SvrOptions{.C = 10, .gamma = 0.5, .epsilon = 0.05});
-      svr.function = trainer.train(svr.scaling.features(table.features), svr.scaling.target(table.target)).function;
+      svr.function = trainer.train(svr.scaling.features(table.features), svr.scaling.target(target)).function;
       svr.C = 10;
       svr.epsilon = 0.05;
       axis.model = std::move(svr);
@@ -281,6 +287,16 @@ TEST_F(CExport, ThermalLagTermsMatchCompensatorThroughAGap) {
   expect_matches(linear, cut, true, 1e-4);
   expect_matches(svr, cut, false, 1e-9);
   expect_matches(svr, cut, true, 1e-4);
+}
+
+// A partially linear SVR (least squares on a thermal node's terms, the kernel on the
+// residual): the header adds the linear part to the kernel sum as the C++ model does.
+TEST_F(CExport, PartiallyLinearSvrMatchesCompensator) {
+  const DriftModel model = fitted_model(*log_, "partially_linear",
+                                        {"lag:420", "hinge:420:-10", "hinge:420:15", "lagrate:420", "rate", "dir:900:420"});
+  ASSERT_TRUE(std::get<SvrModel>(model.axes[0].model).linear_part.has_value());
+  expect_matches(model, *log_, false, 1e-9);
+  expect_matches(model, *log_, true, 1e-4);
 }
 
 // grad:A-B and gradrate:A-B on the chamber air as an extra channel (and on another axis'

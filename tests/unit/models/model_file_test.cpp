@@ -107,6 +107,31 @@ TrainingEnvelope heating_only_envelope() {
 
 // The training envelope is kept exactly; a file without one (written before it was
 // recorded) still loads, and a present one is checked.
+// The linear part of a partially linear SVR is saved with it and predicts again after a
+// load; a file without one is a plain SVR.
+TEST(ModelFile, PartiallyLinearSvrRoundTrips) {
+  const std::vector<std::string> terms = {"lag:300", "rate"};
+  SvrModel svr;
+  svr.scaling = Standardization::identity(2);
+  svr.function.gamma = 0.5;
+  svr.function.bias = 0.1;
+  svr.function.coefficients = Eigen::VectorXd::Constant(1, 0.3);
+  svr.function.support_vectors = Eigen::MatrixXd::Constant(1, 2, 0.2);
+  LinearModel linear;
+  linear.intercept = 1.5;
+  linear.regressors = linear_regressors(2);
+  linear.coefficients = Eigen::Vector2d(0.02, -0.7);
+  svr.linear_part = linear;
+  const SvrModel back = SvrModel::from_json(svr.to_json(terms), terms);
+  ASSERT_TRUE(back.linear_part.has_value());
+  const std::vector<double> x = {12.0, 0.8};
+  EXPECT_DOUBLE_EQ(back.predict(x), svr.predict(x));
+  SvrModel plain = svr;
+  plain.linear_part.reset();
+  EXPECT_NEAR(svr.predict(x) - plain.predict(x), 1.5 + 0.02 * 12 - 0.7 * 0.8, 1e-12);
+  EXPECT_FALSE(SvrModel::from_json(plain.to_json(terms), terms).linear_part.has_value());
+}
+
 TEST(ModelFile, TrainingEnvelopeRoundTripsAndIsOptional) {
   TempDir dir;
   DriftModel model = two_axis_model();
