@@ -127,6 +127,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     if (!logs.empty() && axis.pipeline.smooth_seconds > 0) {
       add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
     }
+    add_expected_held_out(entry, axis.fit);
     axes.push_back(entry);
   }
   result["axes"] = axes;

@@ -8,6 +8,24 @@
 
 namespace thermodrift::cli {
 
+void add_expected_held_out(nlohmann::json& axis, const nlohmann::json& fit) {
+  nlohmann::json expected;
+  if (fit.contains("tuning") && fit["tuning"].value("objective", "") == "cv") {
+    expected = {{"cv_mse", fit["tuning"]["objective_mse"]},
+                {"from", fmt::format("the tuned SVR's blocked {}-fold CV", fit["tuning"].value("folds", 0))}};
+  } else if (fit.contains("feature_selection")) {
+    expected = {{"cv_mse", fit["feature_selection"]["cv_mse"]},
+                {"from", fmt::format("the feature search's blocked {}-fold least-squares CV",
+                                     fit["feature_selection"].value("folds", 0))}};
+  } else {
+    return;
+  }
+  if (axis.contains("noise_floor_estimate")) {
+    expected["x_floor_estimate"] = expected["cv_mse"].get<double>() / axis["noise_floor_estimate"].get<double>();
+  }
+  axis["expected_held_out"] = expected;
+}
+
 void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor) {
   if (!floor.usable() || !(floor.variance > 0)) return;
   axis["noise_floor_estimate"] = floor.variance;
@@ -44,6 +62,16 @@ void print_axes(const nlohmann::json& result, bool as_json, const std::string& t
     if (axis.contains("noise_floor_estimate")) {
       fmt::print("{} noise floor (estimate, from the log): {:.4g} (°/h)²; MSE after = {:.3g} × that estimate\n", name,
                  axis["noise_floor_estimate"].get<double>(), axis["mse_after_x_floor"].get<double>());
+    }
+    if (axis.contains("expected_held_out")) {
+      const auto& expected = axis["expected_held_out"];
+      std::string ratio;
+      if (expected.contains("x_floor_estimate")) {
+        ratio = fmt::format(" = {:.3g} × the floor estimate", expected["x_floor_estimate"].get<double>());
+      }
+      fmt::print("{} expected held-out MSE: {:.4g} (°/h)²{} (from {}; within this log's kind of programme — "
+                 "another programme can be worse)\n",
+                 name, expected["cv_mse"].get<double>(), ratio, expected["from"].get<std::string>());
     }
     if (axis.contains("outside_envelope")) {
       fmt::print("{} outside the training envelope: {} of {} samples ({:.1f} %)\n", name,

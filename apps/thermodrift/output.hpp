@@ -15,6 +15,11 @@ namespace thermodrift::cli {
 // estimate) when the estimate is usable; both are estimates and named so.
 void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor);
 
+// Sets an axis' "expected_held_out": the blocked-CV MSE of the fit (the tuning's CV
+// objective, else the feature search's least-squares CV), what it is, and its ratio to the
+// noise-floor estimate when add_noise_floor set one. Nothing when the fit had no CV.
+void add_expected_held_out(nlohmann::json& axis, const nlohmann::json& fit);
+
 // `result` holds an "axes" array (see above); the table also shows, where an axis has
 // them, its training envelope, noise-floor estimate and samples outside the envelope.
 void print_axes(const nlohmann::json& result, bool as_json, const std::string& title);

@@ -30,8 +30,14 @@ void expect_round_trip(const TempDir& dir, const std::string& log, const std::st
   SCOPED_TRACE(log + " " + model);
   const std::string file = log + "." + model + ".json";
   const auto fit = thermodrift(dir, "fit --data " + log + kColumns + " --model " + model + " --features auto" +
-                                        fit_options + " --out " + file);
+                                        fit_options + " --out " + file + " --json");
   ASSERT_EQ(fit.status, 0) << fit.err;
+  // fit says what to expect held out: the blocked-CV MSE, against the floor estimate.
+  for (const auto& axis : nlohmann::json::parse(fit.out)["axes"]) {
+    ASSERT_TRUE(axis.contains("expected_held_out")) << axis.dump();
+    EXPECT_GT(axis["expected_held_out"]["cv_mse"].get<double>(), 0.0);
+    EXPECT_GT(axis["expected_held_out"]["x_floor_estimate"].get<double>(), 0.0);
+  }
   const auto evaluate = thermodrift(dir, "evaluate --model " + file + " --data " + log + kColumns + " --json");
   ASSERT_EQ(evaluate.status, 0) << evaluate.err;
   const auto result = nlohmann::json::parse(evaluate.out);
