@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <optional>
 #include <cstdlib>
 #include <string_view>
 #include <utility>
@@ -37,13 +38,22 @@ std::vector<std::string_view> split(std::string_view text, char separator) {
   }
 }
 
-double parse_time_constant(const std::string& term, std::string_view text) {
+// The whole of `text` as a finite number, or nothing.
+std::optional<double> finite_number(std::string_view text) {
   const std::string token(text);
   char* end = nullptr;
   errno = 0;
   const double value = token.empty() ? 0 : std::strtod(token.c_str(), &end);
-  if (token.empty() || end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value) ||
-      value <= 0 || value > kMaxTimeConstant) {
+  if (token.empty() || end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value)) {
+    return std::nullopt;
+  }
+  return value;
+}
+
+double parse_time_constant(const std::string& term, std::string_view text) {
+  const std::string token(text);
+  const auto value = finite_number(text).value_or(0);
+  if (!(value > 0) || value > kMaxTimeConstant) {
     bad_term(term, fmt::format("time constant '{}' must be a number of seconds in (0, {:g}]", token, kMaxTimeConstant));
   }
   return value;
@@ -52,14 +62,11 @@ double parse_time_constant(const std::string& term, std::string_view text) {
 // A knot of hinge: a finite temperature difference, °C (negative below the reference).
 double parse_level(const std::string& term, std::string_view text) {
   const std::string token(text);
-  char* end = nullptr;
-  errno = 0;
-  const double value = token.empty() ? 0 : std::strtod(token.c_str(), &end);
-  if (token.empty() || end != token.c_str() + token.size() || errno == ERANGE || !std::isfinite(value) ||
-      std::abs(value) > kMaxKnot) {
+  const auto value = finite_number(text);
+  if (!value || std::abs(*value) > kMaxKnot) {
     bad_term(term, fmt::format("knot '{}' must be a temperature difference in [-{:g}, {:g}] °C", token, kMaxKnot, kMaxKnot));
   }
-  return value;
+  return *value;
 }
 
 // "A-B": two different 1-based channel numbers, returned 0-based.

@@ -9,6 +9,7 @@
 
 #include "thermodrift/error.hpp"
 #include "thermodrift/sim/standard_normal.hpp"
+#include "sim/readout.hpp"
 
 namespace thermodrift::sim {
 
@@ -472,8 +473,7 @@ class LawAxisNoise {
  public:
   LawAxisNoise(const LawNoise& noise, double dt, std::uint64_t seed, std::uint64_t axis)
       : white_std_(noise.angle_random_walk * 60.0 / std::sqrt(dt)),
-        quantum_(noise.quantization_arcsec),
-        dt_(dt),
+        pulses_(noise.quantization_arcsec, dt),
         white_(derive_seed(seed, 10 * axis)),
         bias_(derive_seed(seed, 10 * axis + 1)),
         thermometer_(derive_seed(seed, 10 * axis + 2)),
@@ -498,27 +498,23 @@ class LawAxisNoise {
       rate += p.value;
       p.value = p.phi * p.value + p.sigma * std::sqrt(1 - p.phi * p.phi) * bias_();
     }
-    if (quantum_ <= 0) return rate;
-    carried_ += rate * dt_;
-    const double pulses = std::round(carried_ / quantum_);
-    carried_ -= pulses * quantum_;
-    return pulses * quantum_ / dt_;
+    return pulses_(rate);
   }
 
   double temperature_c(double true_c) {
     const double reading = true_c + temperature_noise_ * thermometer_();
-    return resolution_ > 0 ? std::round(reading / resolution_) * resolution_ : reading;
+    return at_resolution(reading, resolution_);
   }
 
  private:
   struct Process {
     double phi, sigma, value;
   };
-  double white_std_, quantum_, dt_;
+  double white_std_;
+  PulseOutput pulses_;
   StandardNormal white_, bias_, thermometer_;
   double temperature_noise_, resolution_;
   std::vector<Process> processes_;
-  double carried_ = 0;
 };
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "thermodrift/error.hpp"
+#include "sim/readout.hpp"
 
 namespace thermodrift::sim {
 namespace {
@@ -103,10 +104,9 @@ class AxisNoise {
       : white_std_dph_(noise.angle_random_walk_deg_per_sqrt_h * 60.0 / std::sqrt(dt_s)),
         bias_phi_(std::exp(-dt_s / noise.bias_correlation_time_s)),
         bias_std_dph_(bias_process_std_dph(noise)),
-        quantum_arcsec_(noise.quantization_arcsec),
+        pulses_(noise.quantization_arcsec, dt_s),
         temperature_noise_c_(noise.temperature_noise_c),
         temperature_resolution_c_(noise.temperature_resolution_c),
-        dt_s_(dt_s),
         white_(derive_seed(seed, 3 * axis)),
         bias_(derive_seed(seed, 3 * axis + 1)),
         thermometer_(derive_seed(seed, 3 * axis + 2)) {
@@ -117,34 +117,26 @@ class AxisNoise {
   double gyro_dph(double drift_dph) {
     const double rate = drift_dph + white_std_dph_ * white_() + bias_dph_;
     bias_dph_ = bias_phi_ * bias_dph_ + bias_std_dph_ * std::sqrt(1.0 - bias_phi_ * bias_phi_) * bias_();
-    if (quantum_arcsec_ <= 0.0) return rate;
-    // 1 °/h over 1 s is 1 arcsec.
-    untransmitted_arcsec_ += rate * dt_s_;
-    const double pulses = std::round(untransmitted_arcsec_ / quantum_arcsec_);
-    untransmitted_arcsec_ -= pulses * quantum_arcsec_;
-    return pulses * quantum_arcsec_ / dt_s_;
+    return pulses_(rate);
   }
 
   // Thermometer reading of the housing temperature.
   double temperature_c(double housing_c) {
     const double reading = housing_c + temperature_noise_c_ * thermometer_();
-    if (temperature_resolution_c_ <= 0.0) return reading;
-    return std::round(reading / temperature_resolution_c_) * temperature_resolution_c_;
+    return at_resolution(reading, temperature_resolution_c_);
   }
 
  private:
   double white_std_dph_;
   double bias_phi_;
   double bias_std_dph_;
-  double quantum_arcsec_;
+  PulseOutput pulses_;
   double temperature_noise_c_;
   double temperature_resolution_c_;
-  double dt_s_;
   StandardNormal white_;
   StandardNormal bias_;
   StandardNormal thermometer_;
   double bias_dph_ = 0.0;
-  double untransmitted_arcsec_ = 0.0;
 };
 
 }  // namespace
