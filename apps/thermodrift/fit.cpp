@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "data_options.hpp"
+#include "interrupt.hpp"
 #include "output.hpp"
 #include "progress.hpp"
 #include "thermodrift/error.hpp"
@@ -47,6 +48,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   if (args.decimate > 0) options.decimation = args.decimate;
   options.terms = args.features;
   if (args.identify == "thermal-node") options.selection.method = FeatureSelectionOptions::Method::thermal_node;
+  options.selection.proceed = [] { return !interrupt_requested(); };
   if (args.model == "svr") {
     if (app.count("--sigma") && app.count("--gamma")) {
       throw UsageError("give --sigma or --gamma, not both (gamma = 1/(2 sigma²))");

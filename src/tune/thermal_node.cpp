@@ -121,6 +121,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   FeatureSelection result;
   result.scored_by = "least_squares";
   auto score = [&](const NodeModel& model) {
+    if (options.proceed && !options.proceed()) throw Interrupted("feature identification stopped");
     ++result.candidates_scored;
     return least_squares_cv(cache.matrix(model.terms()), y, options.folds);
   };

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,11 +29,12 @@ struct FeatureSelectionOptions {
   // unit (docs/generalization.md has both measurements).
   enum class Method { greedy, thermal_node };
   Method method = Method::greedy;
-  std::size_t knots = 7;              // thermal_node: hinges of the node's static map (fewer if they do not pay)
+  std::size_t knots = 7;              // thermal_node: hinges of the node's static map
   double min_time_constant = 15;      // s: the node's lag grid starts here, steps of √2
   double max_time_constant = 5400;    // s: and stops here or at a quarter of the training span
-  std::size_t max_dynamic_terms = 4;
-  double max_second_lag = 1200;       // s: a second lag longer than this mostly follows the log's start  // thermal_node: gradient rates, memories, second lags
+  std::size_t max_dynamic_terms = 3;  // thermal_node: at most one Shupe term, one memory, one second lag
+  // thermal_node: asked before each set is scored; false stops the search with Interrupted.
+  std::function<bool()> proceed;
   // Blocked CV: contiguous blocks in time. Ten, not the tuning's five: with five, each
   // block is a whole regime of a chamber cycle (the hot soak, the cold ramp), and terms
   // that happen to extrapolate into it win over the physical ones (docs/features.md).
