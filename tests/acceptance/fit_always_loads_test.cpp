@@ -33,7 +33,8 @@ void expect_round_trip(const TempDir& dir, const std::string& log, const std::st
                                         fit_options + " --out " + file + " --json");
   ASSERT_EQ(fit.status, 0) << fit.err;
   // fit says what to expect held out: the blocked-CV MSE, against the floor estimate.
-  for (const auto& axis : nlohmann::json::parse(fit.out)["axes"]) {
+  const auto fitted = nlohmann::json::parse(fit.out);
+  for (const auto& axis : fitted["axes"]) {
     ASSERT_TRUE(axis.contains("expected_held_out")) << axis.dump();
     EXPECT_GT(axis["expected_held_out"]["cv_mse"].get<double>(), 0.0);
     EXPECT_GT(axis["expected_held_out"]["x_floor_estimate"].get<double>(), 0.0);

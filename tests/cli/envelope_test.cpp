@@ -100,7 +100,8 @@ TEST_F(Envelope, EvaluateFlagsTheCoolingAHeatingOnlyModelNeverSaw) {
   ASSERT_EQ(result.status, 0) << result.err;
   EXPECT_TRUE(contains(result.err, "outside the training envelope")) << result.err;
   EXPECT_TRUE(contains(result.err, "cooling never seen in training")) << result.err;
-  for (const auto& axis : parse(result)["axes"]) {
+  const nlohmann::json evaluated = parse(result);  // kept alive: the loop walks inside it
+  for (const auto& axis : evaluated["axes"]) {
     const auto outside = axis.at("outside_envelope").get<std::size_t>();
     EXPECT_GT(outside, 0u);
     EXPECT_GT(axis["outside_envelope_by_limit"]["direction"].get<std::size_t>(), 0u);
@@ -114,12 +115,14 @@ TEST_F(Envelope, EvaluateCountsAHotterLogOutsideAndItsOwnLogInside) {
   const auto own = thermodrift(*dir_, "evaluate --model full.json --data cycle.csv --json");
   ASSERT_EQ(own.status, 0) << own.err;
   EXPECT_FALSE(contains(own.err, "envelope")) << own.err;
-  for (const auto& axis : parse(own)["axes"]) EXPECT_EQ(axis.at("outside_envelope").get<std::size_t>(), 0u);
+  const nlohmann::json own_json = parse(own);
+  for (const auto& axis : own_json["axes"]) EXPECT_EQ(axis.at("outside_envelope").get<std::size_t>(), 0u);
 
   const auto hot = thermodrift(*dir_, "evaluate --model full.json --data hot.csv --json");
   ASSERT_EQ(hot.status, 0) << hot.err;
   EXPECT_TRUE(contains(hot.err, "temperature above")) << hot.err;
-  for (const auto& axis : parse(hot)["axes"]) {
+  const nlohmann::json hot_json = parse(hot);
+  for (const auto& axis : hot_json["axes"]) {
     EXPECT_GT(axis["outside_envelope_by_limit"]["temperature"].get<std::size_t>(), 0u) << axis.dump();
     EXPECT_GT(axis.at("outside_envelope_fraction").get<double>(), 0.0);
     EXPECT_LT(axis.at("outside_envelope_fraction").get<double>(), 0.5);
