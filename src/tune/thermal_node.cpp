@@ -198,8 +198,10 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   // Dynamic terms, forward: each must cut the CV MSE by more than min_gain.
   std::vector<DynamicTerm> candidates;
   for (const double tau : grid) {
-    if (tau <= 1920) candidates.push_back({DynamicTerm::Kind::gradient_rate, tau});
-    if (tau <= 1200) candidates.push_back({DynamicTerm::Kind::second_lag, tau});
+    for (const auto kind : {DynamicTerm::Kind::gradient_rate, DynamicTerm::Kind::second_lag}) {
+      const DynamicTerm candidate{kind, tau};
+      if (tau <= candidate.longest()) candidates.push_back(candidate);
+    }
   }
   for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) candidates.push_back({DynamicTerm::Kind::memory, tau});
   const double keep = 1.0 - options.min_gain;

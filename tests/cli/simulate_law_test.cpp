@@ -16,9 +16,7 @@ using testing::read_file;
 using testing::split_lines;
 using testing::TempDir;
 
-CommandResult thermodrift(const TempDir& dir, const std::string& arguments) {
-  return testing::run_in(dir, "'" + std::string(THERMODRIFT_BINARY) + "' " + arguments);
-}
+constexpr auto thermodrift = testing::run_thermodrift;
 
 TEST(SimulateLaw, WritesTheChamberRunColumns) {
   TempDir dir;
