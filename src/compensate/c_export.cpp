@@ -70,6 +70,9 @@ std::pair<std::size_t, std::size_t> factor_cost(const FeatureFactor& factor) {
     case Kind::hinge: return {1, 6 + powers};
     case Kind::lead: return {0, 3 + powers};
     case Kind::lead_hinge: return {0, 5 + powers};
+    case Kind::lag2: return {2, 8 + powers};
+    case Kind::lag2_rate: return {2, 11 + powers};
+    case Kind::node_hinge: return {factor.atom.tau2 > 0 ? 2 : 1, 14 + powers};
     case Kind::lag_rate: return {1, 7 + powers};
     case Kind::gradient_rate: return {2, 14 + powers};
     case Kind::direction: return {factor.atom.tau2 > 0 ? 3 : 2, (factor.atom.tau2 > 0 ? 14 : 9) + powers};
@@ -661,6 +664,19 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  *lagged = {p}_lag(*lagged, delta_t, step_seconds, tau);\n"
       "  return ({p}_real)((delta_t - *lagged) / tau * 60.0);\n"
       "}}\n\n"
+      "/* lag2:T1:T2 (what 0), lag2rate:T1:T2 (1, degC/min) and nodehinge:T1:T2:TL:K (2): L1 = a\n"
+      " * T1-lag of dT (state[0]), L2 a T2-lag of L1 (state[1]); the node N = L2 + TL dL2/dt, or\n"
+      " * L1 + TL dL1/dt when T2 = 0, through max(0, N - K) */\n"
+      "static inline {p}_real {p}_node({p}_real state[2], {p}_real delta_t, double step_seconds, double t1,\n"
+      "                                double t2, double tl, double knot, int what) {{\n"
+      "  double node;\n"
+      "  state[0] = {p}_lag(state[0], delta_t, step_seconds, t1);\n"
+      "  if (t2 > 0) state[1] = {p}_lag(state[1], state[0], step_seconds, t2);\n"
+      "  if (what == 0) return state[1];\n"
+      "  if (what == 1) return ({p}_real)((state[0] - state[1]) / t2 * 60.0);\n"
+      "  node = t2 > 0 ? state[1] + tl * (state[0] - state[1]) / t2 : state[0] + tl * (delta_t - state[0]) / t1;\n"
+      "  return node > knot ? ({p}_real)(node - knot) : ({p}_real)0;\n"
+      "}}\n\n"
       "/* gradrate:TAU:TG, degC/min^2: the rate of a TG-lag (state[1]) of lagrate:TAU */\n"
       "static inline {p}_real {p}_gradient_rate({p}_real state[2], {p}_real delta_t, double step_seconds,\n"
       "                                          double tau, double tau_gradient) {{\n"
@@ -752,6 +768,15 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
             value = fmt::format("{p}_positive_part(delta_t + {tau} * rate / ({p}_real)60 - {k})", fmt::arg("p", p),
                                 fmt::arg("tau", literal(atom.tau)), fmt::arg("k", literal(atom.level)));
             break;
+          case FeatureAtom::Kind::lag2:
+          case FeatureAtom::Kind::lag2_rate:
+          case FeatureAtom::Kind::node_hinge: {
+            const int what = atom.kind == FeatureAtom::Kind::lag2 ? 0 : atom.kind == FeatureAtom::Kind::lag2_rate ? 1 : 2;
+            value = fmt::format("{}_node({}, delta_t, {}, {}, {}, {}, {}, {})", p, state, step, Literal::time(atom.tau),
+                                atom.tau2 > 0 ? Literal::time(atom.tau2) : std::string("0.0"),
+                                atom.zero > 0 ? Literal::time(atom.zero) : std::string("0.0"), literal(atom.level), what);
+            break;
+          }
           case FeatureAtom::Kind::lag_rate:
             value = fmt::format("{}_lag_rate(&{}[0], delta_t, {}, {})", p, state, step, Literal::time(atom.tau));
             break;

@@ -18,6 +18,7 @@ namespace {
 
 constexpr std::string_view kKnownTerms =
     "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, "
+    "hinge:TAU:K, lead:TAU, leadhinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, "
     "products A*B and powers A^2";
 constexpr double kMaxTimeConstant = 1e6;  // s; eleven days is no thermal lag of a gyro
 constexpr double kMaxKnot = 1000;  // °C of ΔT: beyond any chamber
@@ -57,6 +58,12 @@ double parse_time_constant(const std::string& term, std::string_view text) {
     bad_term(term, fmt::format("time constant '{}' must be a number of seconds in (0, {:g}]", token, kMaxTimeConstant));
   }
   return value;
+}
+
+// T2 or TL of nodehinge: 0 (none) or a time constant.
+double parse_optional_time_constant(const std::string& term, std::string_view text) {
+  if (finite_number(text) == 0.0) return 0;
+  return parse_time_constant(term, text);
 }
 
 // A knot of hinge: a finite temperature difference, °C (negative below the reference).
@@ -120,6 +127,18 @@ FeatureAtom parse_atom(const std::string& term, std::string_view text) {
     atom.level = parse_level(term, parts[2]);
     return atom;
   }
+  if (head == "lag2" || head == "lag2rate") {
+    if (parts.size() != 3) bad_term(term, fmt::format("{} takes two time constants: {}:T1:T2", head, head));
+    return {head == "lag2" ? Kind::lag2 : Kind::lag2_rate, parse_time_constant(term, parts[1]),
+            parse_time_constant(term, parts[2])};
+  }
+  if (head == "nodehinge") {
+    if (parts.size() != 5) bad_term(term, "nodehinge takes three time constants and a knot: nodehinge:T1:T2:TL:K");
+    FeatureAtom atom{Kind::node_hinge, parse_time_constant(term, parts[1]), parse_optional_time_constant(term, parts[2])};
+    atom.zero = parse_optional_time_constant(term, parts[3]);
+    atom.level = parse_level(term, parts[4]);
+    return atom;
+  }
   if (head == "lead") {
     if (parts.size() != 2) bad_term(term, "lead takes one time constant: lead:TAU");
     return {Kind::lead, parse_time_constant(term, parts[1])};
@@ -153,6 +172,9 @@ std::string FeatureAtom::name() const {
     case Kind::hinge: return fmt::format("hinge:{}:{}", tau, level);
     case Kind::lead: return fmt::format("lead:{}", tau);
     case Kind::lead_hinge: return fmt::format("leadhinge:{}:{}", tau, level);
+    case Kind::lag2: return fmt::format("lag2:{}:{}", tau, tau2);
+    case Kind::lag2_rate: return fmt::format("lag2rate:{}:{}", tau, tau2);
+    case Kind::node_hinge: return fmt::format("nodehinge:{}:{}:{}:{}", tau, tau2, zero, level);
   }
   return "?";
 }
@@ -199,6 +221,7 @@ std::vector<double> FeatureTerm::time_constants() const {
   for (const auto& factor : factors) {
     if (factor.atom.tau > 0) out.push_back(factor.atom.tau);
     if (factor.atom.tau2 > 0) out.push_back(factor.atom.tau2);
+    if (factor.atom.zero > 0) out.push_back(factor.atom.zero);
   }
   return out;
 }
@@ -220,6 +243,13 @@ double lag_step(double state, double input, double step_seconds, double tau) {
   return a * state + (1.0 - a) * input;
 }
 
+double TermEvaluator::lag(double& memo_step, double& memo_decay, double state, double input, double step_seconds,
+                          double tau) {
+  if (!(step_seconds > 0)) return input;
+  if (step_seconds != memo_step) memo_step = step_seconds, memo_decay = std::exp(-step_seconds / tau);
+  return memo_decay * state + (1.0 - memo_decay) * input;
+}
+
 TermEvaluator::TermEvaluator(const std::vector<FeatureTerm>& terms) : terms_(&terms) {
   std::size_t factors = 0;
   for (const auto& term : terms) factors += term.factors.size();
@@ -234,29 +264,43 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
     case Kind::delta_t: return delta_t;
     case Kind::rate: return inputs.rate;
     case Kind::lag:
-      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
       return state.first;
     case Kind::lag_rate:
-      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
       return (delta_t - state.first) / atom.tau * 60.0;
     case Kind::gradient_rate: {
-      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
       const double coil_rate = (delta_t - state.first) / atom.tau * 60.0;
-      state.second = lag_step(state.second, coil_rate, step_seconds, atom.tau2);
+      state.second = lag(state.second_step, state.second_decay, state.second, coil_rate, step_seconds, atom.tau2);
       return (coil_rate - state.second) / atom.tau2 * 60.0;
     }
     case Kind::hinge:
-      state.first = lag_step(state.first, delta_t, step_seconds, atom.tau);
+      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
       return std::max(0.0, state.first - atom.level);
     case Kind::lead: return delta_t + atom.tau * inputs.rate / 60.0;
     case Kind::lead_hinge: return std::max(0.0, delta_t + atom.tau * inputs.rate / 60.0 - atom.level);
+    case Kind::lag2:
+    case Kind::lag2_rate:
+    case Kind::node_hinge: {
+      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      if (atom.tau2 > 0) {
+        state.second = lag(state.second_step, state.second_decay, state.second, state.first, step_seconds, atom.tau2);
+      }
+      if (atom.kind == Kind::lag2) return state.second;
+      if (atom.kind == Kind::lag2_rate) return (state.first - state.second) / atom.tau2 * 60.0;
+      const double node = atom.tau2 > 0 ? state.second + atom.zero * (state.first - state.second) / atom.tau2
+                                        : state.first + atom.zero * (delta_t - state.first) / atom.tau;
+      return std::max(0.0, node - atom.level);
+    }
     case Kind::direction: {
       double source = inputs.rate;
       if (atom.tau2 > 0) {
-        state.first = lag_step(state.first, delta_t, step_seconds, atom.tau2);
+        state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau2);
         source = (delta_t - state.first) / atom.tau2 * 60.0;
       }
-      state.second = lag_step(state.second, tanh_by_exp(source / kDirectionRateScale), step_seconds, atom.tau);
+      state.second = lag(state.second_step, state.second_decay, state.second, tanh_by_exp(source / kDirectionRateScale),
+                         step_seconds, atom.tau);
       return state.second;
     }
     case Kind::channel_gradient:

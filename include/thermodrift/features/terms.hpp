@@ -22,6 +22,14 @@
 //   lead:TAU         ΔT + TAU·rate, °C: a node the sensor lags by TAU (a sensor deeper in the unit
 //                    than the coil: on another axis' block, or on a massive mount)
 //   leadhinge:TAU:K  max(0, lead:TAU - K): the piecewise-linear map of such a node
+//   lag2:T1:T2       L2, a lag (T2) of L1 = lag:T1: the coil two thermal nodes behind the sensor, °C
+//   lag2rate:T1:T2   dL2/dt = (L1 - L2)/T2, °C/min
+//   nodehinge:T1:T2:TL:K  max(0, N - K), N = L2 + TL·dL2/dt (T2 > 0) or L1 + TL·dL1/dt (T2 = 0):
+//                    the static map of a node with two poles and a zero, N = (1 + s·TL) /
+//                    ((1 + s·T1)(1 + s·T2)) ΔT, which holds a coil two nodes behind the sensor
+//                    (TL = 0) and one on another thermal path than the sensor's (TL > 0: the
+//                    sensor lags the common source by TL, the coil by T1). N itself is linear in
+//                    lag2 and lag2rate (or lag and lagrate), so only its hinges need an atom.
 //   xN               column N of libsvm-format data, as given (never streamed)
 // A term is one atom or a product of atoms with powers: "dT^2", "dT*rate", "lag:600^2*rate".
 //
@@ -45,7 +53,7 @@ inline constexpr std::size_t kMaxTemperatureChannels = 64;
 
 struct FeatureAtom {
   enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input, channel_gradient,
-                    channel_gradient_rate, hinge, lead, lead_hinge };
+                    channel_gradient_rate, hinge, lead, lead_hinge, lag2, lag2_rate, node_hinge };
   Kind kind = Kind::delta_t;
   double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory)
   double tau2 = 0;              // s: gradrate (gradient lag); dir (lag of its rate, 0: smoothed rate)
@@ -53,6 +61,7 @@ struct FeatureAtom {
   std::size_t channel = 0;      // 0-based temperature channels A and B of grad / gradrate:A-B
   std::size_t channel2 = 0;
   double level = 0;             // °C of ΔT: the knot of hinge:TAU:K
+  double zero = 0;              // s: TL of nodehinge (0: none)
 
   bool reads_channels() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
 
@@ -114,9 +123,15 @@ class TermEvaluator {
 
  private:
   struct State {
-    double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG)
-    double second = 0;  // G (gradrate) or the direction memory (dir)
+    double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG); L1 of lag2
+    double second = 0;  // G (gradrate), the direction memory (dir) or L2 (lag2, lag2rate, nodehinge)
+    // exp(-step/τ) of each filter for the last step length: a log of even steps needs one exp
+    // per filter, not one per sample.
+    double first_step = -1, first_decay = 0, second_step = -1, second_decay = 0;
   };
+  // lag_step with the filter's memoized decay; the same arithmetic, so the same bits.
+  static double lag(double& memo_step, double& memo_decay, double state, double input, double step_seconds,
+                    double tau);
   double atom_value(const FeatureAtom& atom, State& state, const TermInputs& inputs);
 
   const std::vector<FeatureTerm>* terms_;
@@ -124,7 +139,8 @@ class TermEvaluator {
 };
 
 // First-order lag update exact for an input held over the step; `step_seconds` 0 sets
-// the state to the input (equilibrium). Shared by the evaluator and its tests.
+// the state to the input (equilibrium). The evaluator steps its filters by the same
+// arithmetic (with exp memoized per filter); its tests use this one.
 double lag_step(double state, double input, double step_seconds, double tau);
 
 }  // namespace thermodrift

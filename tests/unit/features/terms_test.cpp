@@ -24,7 +24,8 @@ TEST(FeatureTerms, NamesRoundTrip) {
   for (const std::string name : {"dT", "rate", "lag:600", "lagrate:420", "gradrate:420:240", "dir:900",
                                  "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3", "grad:1-4",
                                  "gradrate:12-3", "grad:2-1*lag:600", "hinge:600:-12.5", "hinge:600:0", "hinge:60:3*rate", "lead:900",
-                                 "leadhinge:900:-3.5"}) {
+                                 "leadhinge:900:-3.5", "lag2:600:120", "lag2rate:600:120", "nodehinge:600:120:0:-3.5",
+                                 "nodehinge:600:0:1800:12", "nodehinge:600:120:900:0*rate"}) {
     EXPECT_EQ(FeatureTerm::parse(name).name(), name);
   }
   const auto term = FeatureTerm::parse("gradrate:420:240");
@@ -42,7 +43,10 @@ TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
                                 "x0", "x3^2", "x3*dT", "rate:60", "grad", "grad:1", "grad:1-1", "grad:0-2", "grad:1-65",
                                 "grad:a-b", "grad:1-2-3", "gradrate:1-", "grad:1-2:3", "grad:-1-2", "grad:001-2",
                                 "hinge", "hinge:600", "hinge:0:5", "hinge:600:x", "hinge:600:nan", "hinge:600:1e9",
-                                "hinge:600:1:2", "lead", "lead:0", "lead:5:5", "leadhinge:5", "leadhinge:0:1"}) {
+                                "hinge:600:1:2", "lead", "lead:0", "lead:5:5", "leadhinge:5", "leadhinge:0:1",
+                                "lag2:600", "lag2:600:0", "lag2:0:5", "lag2rate:600", "lag2rate:600:-1",
+                                "nodehinge:600:0:0", "nodehinge:0:0:0:1", "nodehinge:600:-1:0:1",
+                                "nodehinge:600:0:x:1", "nodehinge:600:0:0:nan", "nodehinge:600:0:0:1:2"}) {
     try {
       FeatureTerm::parse(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -161,6 +165,47 @@ TEST(FeatureTerms, LeadAddsBackTheLagOfARamp) {
     evaluator.push(delta_t, rate, 1.0, values);
     EXPECT_DOUBLE_EQ(values[0], delta_t + 600 * rate / 60.0);
     EXPECT_DOUBLE_EQ(values[1], std::max(0.0, values[0] - 10.0));
+  }
+}
+
+// lag2:T1:T2 is two first-order lags in series. On a ramp r from equilibrium its closed
+// form is L2 = r·(t - T1 - T2) + r·(T1²·e^(-t/T1) - T2²·e^(-t/T2)) / (T1 - T2). Each filter
+// step holds the step's last input over it, which puts a lag about half a step ahead of a
+// ramp: the pair is checked to one step's rise, r·1 s. lag2rate is checked against the
+// states' own difference and nodehinge against L2 + TL·dL2/dt through its knot.
+TEST(FeatureTerms, SeriesLagsFollowTheirClosedFormOnARamp) {
+  const double t1 = 400, t2 = 150, lead = 900, knot = 3;
+  const auto terms = parse_all({"lag2:400:150", "lag2rate:400:150", "nodehinge:400:150:900:3", "lag:400"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(4);
+  const double r = 1.0 / 60.0;  // °C/s
+  bool crossed = false;
+  for (int k = 0; k <= 3000; ++k) {
+    const double t = k;
+    evaluator.push(r * t, 60 * r, k == 0 ? 0.0 : 1.0, values);
+    const double exact = r * (t - t1 - t2) + r * (t1 * t1 * std::exp(-t / t1) - t2 * t2 * std::exp(-t / t2)) / (t1 - t2);
+    EXPECT_NEAR(values[0], exact, r * 1.0) << t;
+    if (k > 0) EXPECT_GT(values[0], exact) << t;  // ahead of the ramp, never behind it
+    const double l2_rate = (values[3] - values[0]) / t2 * 60.0;
+    EXPECT_NEAR(values[1], l2_rate, 1e-12) << t;
+    EXPECT_NEAR(values[2], std::max(0.0, values[0] + lead * l2_rate / 60.0 - knot), 1e-12) << t;
+    crossed = crossed || values[2] > 0;
+  }
+  EXPECT_TRUE(crossed);
+  EXPECT_NEAR(values[1], 60 * r * (1 - std::exp(-3000 / t2)), 2e-2);  // on the ramp's rate
+}
+
+// nodehinge with T2 = 0 is a lead-lag of one pole: L1 + TL·dL1/dt. With TL = T1 it undoes
+// the lag exactly (the node is ΔT itself), and with TL = 0 it is hinge:T1:K.
+TEST(FeatureTerms, NodeHingeOfOnePoleIsALeadLag) {
+  const auto terms = parse_all({"nodehinge:300:0:300:-100", "nodehinge:300:0:0:2", "hinge:300:2"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(3);
+  for (int k = 0; k <= 2000; ++k) {
+    const double delta_t = 5 * std::sin(k / 300.0);
+    evaluator.push(delta_t, 0, k == 0 ? 0.0 : 1.0, values);
+    EXPECT_NEAR(values[0] - 100, delta_t, 1e-9) << k;
+    EXPECT_DOUBLE_EQ(values[1], values[2]) << k;
   }
 }
 
