@@ -28,7 +28,7 @@ struct FitArguments {
   double rate_span = 0;
   std::size_t decimate = 0;
   std::vector<std::string> features{"dT", "rate"};
-  std::string identify = "greedy";
+  std::string identify = "thermal-node";
   std::string tune;
   std::string objective = "cv";
   std::uint64_t seed = 1;
@@ -47,7 +47,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   if (args.rate_span > 0) options.rate_span_seconds = args.rate_span;
   if (args.decimate > 0) options.decimation = args.decimate;
   options.terms = args.features;
-  if (args.identify == "thermal-node") options.selection.method = FeatureSelectionOptions::Method::thermal_node;
+  if (args.identify == "greedy") options.selection.method = FeatureSelectionOptions::Method::greedy;
   options.selection.proceed = [] { return !interrupt_requested(); };
   if (args.model == "svr") {
     if (app.count("--sigma") && app.count("--gamma")) {
@@ -159,9 +159,9 @@ Command add_fit(CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   app->add_option("--features", args->features, "feature terms (default dT,rate, the seed's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, products, powers), or auto to choose them per axis by blocked CV; docs/features.md")->delimiter(',');
   app->add_option("--identify", args->identify,
-                  "with --features auto: greedy (default; a forward search over single terms) or thermal-node "
-                  "(one node's lag, a piecewise-linear map of its temperature and linear dynamic terms; "
-                  "docs/features.md)")
+                  "with --features auto: thermal-node (default; one node's lags, a piecewise-linear map of its "
+                  "temperature and linear dynamic terms) or greedy (a forward search over single terms); "
+                  "docs/features.md")
       ->check(CLI::IsMember({"greedy", "thermal-node"}));
   app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
       ->check(CLI::IsMember({"afsa", "grid", "random"}));

@@ -73,6 +73,7 @@ std::pair<std::size_t, std::size_t> factor_cost(const FeatureFactor& factor) {
     case Kind::lag2: return {2, 8 + powers};
     case Kind::lag2_rate: return {2, 11 + powers};
     case Kind::node_hinge: return {factor.atom.tau2 > 0 ? 2 : 1, 14 + powers};
+    case Kind::play: return {1, 10 + powers};
     case Kind::lag_rate: return {1, 7 + powers};
     case Kind::gradient_rate: return {2, 14 + powers};
     case Kind::direction: return {factor.atom.tau2 > 0 ? 3 : 2, (factor.atom.tau2 > 0 ? 14 : 9) + powers};
@@ -677,6 +678,16 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  node = t2 > 0 ? state[1] + tl * (state[0] - state[1]) / t2 : state[0] + tl * (delta_t - state[0]) / t1;\n"
       "  return node > knot ? ({p}_real)(node - knot) : ({p}_real)0;\n"
       "}}\n\n"
+      "/* play:TAU:W: (L - P)/W, L a TAU-lag of dT (state[0]), P (state[1]) the play operator on L\n"
+      " * with half-width W: it moves only to stay within W of L; a restart sets it to L */\n"
+      "static inline {p}_real {p}_play({p}_real state[2], {p}_real delta_t, double step_seconds, double tau,\n"
+      "                                {p}_real width) {{\n"
+      "  state[0] = {p}_lag(state[0], delta_t, step_seconds, tau);\n"
+      "  if (!(step_seconds > 0)) state[1] = state[0];\n"
+      "  if (state[1] < state[0] - width) state[1] = state[0] - width;\n"
+      "  if (state[1] > state[0] + width) state[1] = state[0] + width;\n"
+      "  return (state[0] - state[1]) / width;\n"
+      "}}\n\n"
       "/* gradrate:TAU:TG, degC/min^2: the rate of a TG-lag (state[1]) of lagrate:TAU */\n"
       "static inline {p}_real {p}_gradient_rate({p}_real state[2], {p}_real delta_t, double step_seconds,\n"
       "                                          double tau, double tau_gradient) {{\n"
@@ -777,6 +788,10 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
                                 atom.zero > 0 ? Literal::time(atom.zero) : std::string("0.0"), literal(atom.level), what);
             break;
           }
+          case FeatureAtom::Kind::play:
+            value = fmt::format("{}_play({}, delta_t, {}, {}, {})", p, state, step, Literal::time(atom.tau),
+                                literal(atom.level));
+            break;
           case FeatureAtom::Kind::lag_rate:
             value = fmt::format("{}_lag_rate(&{}[0], delta_t, {}, {})", p, state, step, Literal::time(atom.tau));
             break;

@@ -18,7 +18,7 @@ namespace {
 
 constexpr std::string_view kKnownTerms =
     "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, "
-    "hinge:TAU:K, lead:TAU, leadhinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, "
+    "hinge:TAU:K, lead:TAU, leadhinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, "
     "products A*B and powers A^2";
 constexpr double kMaxTimeConstant = 1e6;  // s; eleven days is no thermal lag of a gyro
 constexpr double kMaxKnot = 1000;  // °C of ΔT: beyond any chamber
@@ -139,6 +139,16 @@ FeatureAtom parse_atom(const std::string& term, std::string_view text) {
     atom.level = parse_level(term, parts[4]);
     return atom;
   }
+  if (head == "play") {
+    if (parts.size() != 3) bad_term(term, "play takes a time constant and a half-width: play:TAU:W");
+    FeatureAtom atom{Kind::play, parse_time_constant(term, parts[1])};
+    const auto width = finite_number(parts[2]);
+    if (!width || !(*width > 0) || *width > kMaxKnot) {
+      bad_term(term, fmt::format("half-width '{}' must be a temperature difference in (0, {:g}] °C", parts[2], kMaxKnot));
+    }
+    atom.level = *width;
+    return atom;
+  }
   if (head == "lead") {
     if (parts.size() != 2) bad_term(term, "lead takes one time constant: lead:TAU");
     return {Kind::lead, parse_time_constant(term, parts[1])};
@@ -175,6 +185,7 @@ std::string FeatureAtom::name() const {
     case Kind::lag2: return fmt::format("lag2:{}:{}", tau, tau2);
     case Kind::lag2_rate: return fmt::format("lag2rate:{}:{}", tau, tau2);
     case Kind::node_hinge: return fmt::format("nodehinge:{}:{}:{}:{}", tau, tau2, zero, level);
+    case Kind::play: return fmt::format("play:{}:{}", tau, level);
   }
   return "?";
 }
@@ -292,6 +303,12 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
       const double node = atom.tau2 > 0 ? state.second + atom.zero * (state.first - state.second) / atom.tau2
                                         : state.first + atom.zero * (delta_t - state.first) / atom.tau;
       return std::max(0.0, node - atom.level);
+    }
+    case Kind::play: {
+      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      if (!(step_seconds > 0)) state.second = state.first;  // equilibrium: nothing to catch up
+      state.second = std::clamp(state.second, state.first - atom.level, state.first + atom.level);
+      return (state.first - state.second) / atom.level;
     }
     case Kind::direction: {
       double source = inputs.rate;

@@ -16,8 +16,8 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // A term linear in the node's dynamics, added to the node's static map when it pays.
 struct DynamicTerm {
-  enum class Kind { gradient_rate, memory, second_lag } kind;
-  double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ
+  enum class Kind { gradient_rate, memory, second_lag, play } kind;
+  double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W
 
   // `lead`: the node leads the sensor, and memories follow the sensor's own rate.
   std::string name(double node_tau, bool lead) const {
@@ -25,20 +25,35 @@ struct DynamicTerm {
       case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", node_tau, tau);
       case Kind::memory: return lead ? fmt::format("dir:{}", tau) : fmt::format("dir:{}:{}", tau, node_tau);
       case Kind::second_lag: return fmt::format("lag:{}", tau);
+      case Kind::play: return fmt::format("play:{}:{}", node_tau, tau);
     }
     return {};
   }
-  // The longest constant a term of this kind may take, s: memories and gradient lags
-  // beyond these follow the log's own course more than any physics.
+  // The range of the constant, and the step it is rounded to. Memories and gradient lags
+  // beyond these follow the log's own course more than any physics; a play wider than
+  // 10 °C is a static map, one narrower than 0.2 °C is noise on the node.
+  double shortest(double min_time_constant) const { return kind == Kind::play ? 0.2 : min_time_constant / 2; }
   double longest() const {
     switch (kind) {
       case Kind::gradient_rate: return 1920;
       case Kind::memory: return 3000;
       case Kind::second_lag: return 1200;
+      case Kind::play: return 10;
     }
     return 0;
   }
+  double resolution() const { return kind == Kind::play ? 0.01 : 1.0; }
   bool operator==(const DynamicTerm&) const = default;
+};
+
+// A constant of a model as the refinement moves it: in log scale, rounded to `resolution`
+// (whole seconds for time constants) within [low, high].
+struct Constant {
+  double* value;
+  double resolution = 1;
+  double low = 0, high = 0;
+  double rounded(double v) const { return std::round(v / resolution) * resolution; }
+  bool inside() const { return *value >= low && *value <= high; }
 };
 
 // One thermal node behind the axis' sensor (or, for a sensor deeper in the unit, ahead of
@@ -75,12 +90,16 @@ struct NodeModel {
     return out;
   }
 
-  // The time constants a refinement moves: the node's, then each dynamic term's.
-  std::vector<double*> constants() {
-    std::vector<double*> out = {&tau};
-    if (tau2 > 0) out.push_back(&tau2);
-    if (zero > 0) out.push_back(&zero);
-    for (auto& term : dynamics) out.push_back(&term.tau);
+  // The constants a refinement moves: the node's, then each dynamic term's. `longest` bounds
+  // the time constants, `shortest` the node's.
+  std::vector<Constant> constants(double shortest, double longest) {
+    std::vector<Constant> out = {{&tau, 1, shortest, longest}};
+    if (tau2 > 0) out.push_back({&tau2, 1, shortest, longest});
+    if (zero > 0) out.push_back({&zero, 1, shortest, longest});
+    for (auto& term : dynamics) {
+      out.push_back({&term.tau, term.resolution(), term.shortest(2 * shortest),
+                     term.kind == DynamicTerm::Kind::play ? term.longest() : std::min(term.longest(), longest)});
+    }
     return out;
   }
 };
@@ -207,9 +226,11 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   }
 
   // A model's constants are all identifiable from the log and its terms distinct.
+  const double shortest = options.min_time_constant / 2;
+  auto constants = [&](NodeModel& m) { return m.constants(shortest, longest); };
   auto feasible = [&](NodeModel& m) {
-    for (double* constant : m.constants()) {
-      if (*constant < options.min_time_constant / 2 || *constant > longest) return false;
+    for (const Constant& constant : constants(m)) {
+      if (!constant.inside()) return false;
     }
     return m.tau + m.tau2 <= longest && distinct(m);
   };
@@ -226,14 +247,14 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     for (const double step : {0.25, 0.125, 0.0625}) {
       for (bool pass_improved = true; pass_improved;) {
         pass_improved = false;
-        for (std::size_t k = 0; k < model.constants().size(); ++k) {
+        for (std::size_t k = 0; k < constants(model).size(); ++k) {
           for (bool improved = true; improved;) {
             improved = false;
             for (const double factor : {std::pow(2.0, step), std::pow(2.0, -step)}) {
               NodeModel trial = model;
-              double& tau = *trial.constants()[k];
-              tau = std::round(tau * factor);
-              if (tau == *model.constants()[k] || !feasible(trial)) continue;
+              const Constant constant = constants(trial)[k];
+              *constant.value = constant.rounded(*constant.value * factor);
+              if (*constant.value == *constants(model)[k].value || !feasible(trial)) continue;
               const double cv = score(trial);
               if (cv < model_cv) {
                 model = std::move(trial), model_cv = cv, improved = pass_improved = true;
@@ -244,18 +265,20 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
         }
       }
     }
-    const std::size_t dim = model.constants().size();
+    const std::size_t dim = constants(model).size();
     if (dim > 1) {
       auto at = [&](const Eigen::VectorXd& v, NodeModel& m) -> double {
         m = model;
-        const auto constants = m.constants();
-        for (std::size_t k = 0; k < dim; ++k) *constants[k] = std::round(std::exp(v[static_cast<Eigen::Index>(k)]));
+        const auto moved = constants(m);
+        for (std::size_t k = 0; k < dim; ++k) {
+          *moved[k].value = moved[k].rounded(std::exp(v[static_cast<Eigen::Index>(k)]));
+        }
         return feasible(m) ? score(m) : kInfinity;
       };
       std::vector<Eigen::VectorXd> simplex(dim + 1, Eigen::VectorXd(static_cast<Eigen::Index>(dim)));
       std::vector<double> f(dim + 1);
-      const auto start = model.constants();
-      for (std::size_t k = 0; k < dim; ++k) simplex[0][static_cast<Eigen::Index>(k)] = std::log(*start[k]);
+      const auto start = constants(model);
+      for (std::size_t k = 0; k < dim; ++k) simplex[0][static_cast<Eigen::Index>(k)] = std::log(*start[k].value);
       NodeModel scratch;
       f[0] = model_cv;
       for (std::size_t i = 1; i <= dim; ++i) {
@@ -311,10 +334,10 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       }
     }
     std::string moves;
-    const auto from = before.constants(), to = model.constants();
+    const auto from = constants(before), to = constants(model);
     for (std::size_t k = 0; k < to.size(); ++k) {
-      const double was = k < from.size() ? *from[k] : 0;
-      if (was != *to[k]) moves += fmt::format("{}{} -> {}", moves.empty() ? "" : ", ", was, *to[k]);
+      const double was = k < from.size() ? *from[k].value : 0;
+      if (was != *to[k].value) moves += fmt::format("{}{} -> {}", moves.empty() ? "" : ", ", was, *to[k].value);
     }
     if (!moves.empty()) result.path.push_back({"tune", moves, model_cv, model.terms()});
   };
@@ -329,6 +352,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     }
   }
   for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) candidates.push_back({DynamicTerm::Kind::memory, tau});
+  for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
   const double keep = 1.0 - options.min_gain;
   while (best.dynamics.size() < options.max_dynamic_terms) {
     std::vector<std::pair<double, NodeModel>> ranked;
@@ -342,13 +366,18 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       ranked.emplace_back(score(trial), std::move(trial));
     };
     for (const auto& candidate : candidates) {
-    if (!(best.lead && candidate.kind == DynamicTerm::Kind::gradient_rate)) offer({candidate});
-  }
-    // A Shupe term and a memory together: each alone is often beaten by a proxy that
+      // A leading node has no lag for a Shupe term or a play to read.
+      const bool reads_lag = candidate.kind == DynamicTerm::Kind::gradient_rate || candidate.kind == DynamicTerm::Kind::play;
+      if (!(best.lead && reads_lag)) offer({candidate});
+    }
+    // A Shupe term and a memory (or a play) together: each alone is often beaten by a proxy that
     // then blocks the pair (the greedy search's lesson, docs/features.md).
     for (const double tg : {60.0, 120.0, 240.0, 480.0}) {
       for (const double td : {300.0, 600.0, 1200.0}) {
         if (!best.lead) offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td}});
+      }
+      for (const double width : {0.5, 1.0, 2.0, 4.0}) {
+        if (!best.lead) offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::play, width}});
       }
     }
     if (ranked.empty()) break;

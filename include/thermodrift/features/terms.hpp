@@ -30,6 +30,11 @@
 //                    (TL = 0) and one on another thermal path than the sensor's (TL > 0: the
 //                    sensor lags the common source by TL, the coil by T1). N itself is linear in
 //                    lag2 and lag2rate (or lag and lagrate), so only its hinges need an atom.
+//   play:TAU:W       (L - P)/W, L = lag:TAU and P the play (backlash) operator on it with half-width
+//                    W °C: P stays put while |L - P| < W and is dragged along at W behind L
+//                    beyond; unitless in [-1, 1]. A hysteresis set by how far the temperature
+//                    moved since it last turned, whatever the rate (dir's memory is set by
+//                    the rate and how long it lasted)
 //   xN               column N of libsvm-format data, as given (never streamed)
 // A term is one atom or a product of atoms with powers: "dT^2", "dT*rate", "lag:600^2*rate".
 //
@@ -53,14 +58,14 @@ inline constexpr std::size_t kMaxTemperatureChannels = 64;
 
 struct FeatureAtom {
   enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input, channel_gradient,
-                    channel_gradient_rate, hinge, lead, lead_hinge, lag2, lag2_rate, node_hinge };
+                    channel_gradient_rate, hinge, lead, lead_hinge, lag2, lag2_rate, node_hinge, play };
   Kind kind = Kind::delta_t;
   double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory)
   double tau2 = 0;              // s: gradrate (gradient lag); dir (lag of its rate, 0: smoothed rate)
   std::size_t input_index = 0;  // 0-based column, for Kind::input
   std::size_t channel = 0;      // 0-based temperature channels A and B of grad / gradrate:A-B
   std::size_t channel2 = 0;
-  double level = 0;             // °C of ΔT: the knot of hinge:TAU:K
+  double level = 0;             // °C of ΔT: the knot of hinge:TAU:K; the half-width W of play:TAU:W
   double zero = 0;              // s: TL of nodehinge (0: none)
 
   bool reads_channels() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
@@ -124,7 +129,7 @@ class TermEvaluator {
  private:
   struct State {
     double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG); L1 of lag2
-    double second = 0;  // G (gradrate), the direction memory (dir) or L2 (lag2, lag2rate, nodehinge)
+    double second = 0;  // G (gradrate), the direction memory (dir), L2 (lag2, lag2rate, nodehinge) or P (play)
     // exp(-step/τ) of each filter for the last step length: a log of even steps needs one exp
     // per filter, not one per sample.
     double first_step = -1, first_decay = 0, second_step = -1, second_decay = 0;

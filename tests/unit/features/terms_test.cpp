@@ -25,7 +25,8 @@ TEST(FeatureTerms, NamesRoundTrip) {
                                  "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3", "grad:1-4",
                                  "gradrate:12-3", "grad:2-1*lag:600", "hinge:600:-12.5", "hinge:600:0", "hinge:60:3*rate", "lead:900",
                                  "leadhinge:900:-3.5", "lag2:600:120", "lag2rate:600:120", "nodehinge:600:120:0:-3.5",
-                                 "nodehinge:600:0:1800:12", "nodehinge:600:120:900:0*rate"}) {
+                                 "nodehinge:600:0:1800:12", "nodehinge:600:120:900:0*rate", "play:600:1.5",
+                                 "play:600:0.25*rate"}) {
     EXPECT_EQ(FeatureTerm::parse(name).name(), name);
   }
   const auto term = FeatureTerm::parse("gradrate:420:240");
@@ -46,7 +47,9 @@ TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
                                 "hinge:600:1:2", "lead", "lead:0", "lead:5:5", "leadhinge:5", "leadhinge:0:1",
                                 "lag2:600", "lag2:600:0", "lag2:0:5", "lag2rate:600", "lag2rate:600:-1",
                                 "nodehinge:600:0:0", "nodehinge:0:0:0:1", "nodehinge:600:-1:0:1",
-                                "nodehinge:600:0:x:1", "nodehinge:600:0:0:nan", "nodehinge:600:0:0:1:2"}) {
+                                "nodehinge:600:0:x:1", "nodehinge:600:0:0:nan", "nodehinge:600:0:0:1:2",
+                                "play", "play:600", "play:600:0", "play:600:-1", "play:0:1", "play:600:1e9",
+                                "play:600:1:2"}) {
     try {
       FeatureTerm::parse(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -207,6 +210,32 @@ TEST(FeatureTerms, NodeHingeOfOnePoleIsALeadLag) {
     EXPECT_NEAR(values[0] - 100, delta_t, 1e-9) << k;
     EXPECT_DOUBLE_EQ(values[1], values[2]) << k;
   }
+}
+
+// play:TAU:W is the backlash of the node: +1 after the node rose by more than 2W, -1 after
+// it fell by that much, and in between after a turn it moves one for one with the node
+// ((L - P)/W with P held). A lag of 1 s sampled every 10 s is the input to 5e-5 °C.
+TEST(FeatureTerms, PlayIsTheBacklashOfTheNode) {
+  const auto terms = parse_all({"play:1:1", "play:1:2"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(2);
+  evaluator.push(0.0, 0, 0, values);
+  EXPECT_EQ(values[0], 0);  // a start is equilibrium: the play sits on the node
+  for (double t = 0.5; t <= 5.0; t += 0.5) evaluator.push(t, 0, 10, values);  // up 5 °C
+  EXPECT_NEAR(values[0], 1.0, 1e-3);
+  EXPECT_NEAR(values[1], 1.0, 1e-3);
+  evaluator.push(4.0, 0, 10, values);  // a turn of 1 °C: inside both bands
+  EXPECT_NEAR(values[0], 0.0, 1e-3);
+  EXPECT_NEAR(values[1], 0.5, 1e-3);
+  evaluator.push(2.5, 0, 10, values);  // 2.5 °C below the top: through the narrow band only
+  EXPECT_NEAR(values[0], -1.0, 1e-3);
+  EXPECT_NEAR(values[1], -0.25, 1e-3);
+  evaluator.push(3.0, 0, 10, values);  // back up 0.5 °C: both hold their new play
+  EXPECT_NEAR(values[0], -0.5, 1e-3);
+  EXPECT_NEAR(values[1], 0.0, 1e-3);
+  evaluator.push(3.0, 0, 0, values);  // a restart: equilibrium again
+  EXPECT_EQ(values[0], 0);
+  EXPECT_EQ(values[1], 0);
 }
 
 TEST(FeatureTerms, ProductsAndPowersMultiplyTheAtoms) {
