@@ -19,11 +19,10 @@ struct DynamicTerm {
   enum class Kind { gradient_rate, memory, second_lag, play } kind;
   double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W
 
-  // `lead`: the node leads the sensor, and memories follow the sensor's own rate.
-  std::string name(double node_tau, bool lead) const {
+  std::string name(double node_tau) const {
     switch (kind) {
       case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", node_tau, tau);
-      case Kind::memory: return lead ? fmt::format("dir:{}", tau) : fmt::format("dir:{}:{}", tau, node_tau);
+      case Kind::memory: return fmt::format("dir:{}:{}", tau, node_tau);
       case Kind::second_lag: return fmt::format("lag:{}", tau);
       case Kind::play: return fmt::format("play:{}:{}", node_tau, tau);
     }
@@ -56,9 +55,9 @@ struct Constant {
   bool inside() const { return *value >= low && *value <= high; }
 };
 
-// One thermal node behind the axis' sensor (or, for a sensor deeper in the unit, ahead of
-// it): its temperature L (a lag τ of the smoothed ΔT, or ΔT + τ·rate) through a
-// piecewise-linear static map (L and hinges at fixed knots), its rate, the sensor's own
+// One thermal node behind the axis' sensor: its temperature N (a lag τ of the smoothed ΔT,
+// two lags in series, or a lag with a lead for a sensor on another thermal path) through a
+// piecewise-linear static map (N and hinges at fixed knots), its rate, the sensor's own
 // rate, and dynamic terms linear in the node's state.
 struct NodeModel {
   double tau = 0;   // T1: the node's (first) lag
@@ -66,7 +65,6 @@ struct NodeModel {
   double zero = 0;  // TL: the lead of a node on another thermal path than the sensor's (0: none)
   std::vector<double> knots;  // °C of ΔT
   std::vector<DynamicTerm> dynamics;
-  bool lead = false;  // the node leads the sensor (lead:τ) instead of lagging it (lag:τ)
 
   bool plain() const { return tau2 == 0 && zero == 0; }
   // The lag the dynamic terms read: the node's, or the sum of a series pair's.
@@ -74,11 +72,10 @@ struct NodeModel {
 
   std::vector<std::string> terms() const {
     std::vector<std::string> out;
-    if (lead || plain()) {
-      const char* node = lead ? "lead" : "lag";
-      out.push_back(fmt::format("{}:{}", node, tau));
-      for (const double knot : knots) out.push_back(fmt::format("{}:{}:{}", lead ? "leadhinge" : "hinge", tau, knot));
-      if (!lead) out.push_back(fmt::format("lagrate:{}", tau));
+    if (plain()) {
+      out.push_back(fmt::format("lag:{}", tau));
+      for (const double knot : knots) out.push_back(fmt::format("hinge:{}:{}", tau, knot));
+      out.push_back(fmt::format("lagrate:{}", tau));
     } else {
       out.push_back(tau2 > 0 ? fmt::format("lag2:{}:{}", tau, tau2) : fmt::format("lag:{}", tau));
       for (const double knot : knots) out.push_back(fmt::format("nodehinge:{}:{}:{}:{}", tau, tau2, zero, knot));
@@ -86,7 +83,7 @@ struct NodeModel {
       if (tau2 > 0) out.push_back(fmt::format("lag2rate:{}:{}", tau, tau2));
     }
     out.push_back("rate");
-    for (const auto& term : dynamics) out.push_back(term.name(dynamics_tau(), lead));
+    for (const auto& term : dynamics) out.push_back(term.name(dynamics_tau()));
     return out;
   }
 
@@ -181,28 +178,24 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
 
   NodeModel best;
   best.knots = spread_knots(cache.matrix({"dT"}).col(0), options.knots);
-  // A lagging node first; a leading one only when it is clearly better: its argument moves
-  // with the rate, so on a faster programme its static map is read where it was never
-  // fitted, while a lag stays within the temperatures the log visited.
+  // A lagging node on the grid. (A node that leads the sensor, ΔT + τ·rate, was tried as an
+  // alternative: on the development laws it won the CV by a fifth where the sensor sat on
+  // another block and then failed the next cycle by 100-600x; the lead-lag below holds
+  // that case with a lag to smooth the rate.)
   double best_cv = kInfinity;
-  const double lead_advantage = (1.0 - options.min_gain) * (1.0 - options.min_gain);
-  for (const bool lead : {false, true}) {
-    for (const double tau : grid) {
-      NodeModel trial = best;
-      trial.tau = tau;
-      trial.lead = lead;
-      const double cv = score(trial);
-      if (cv < (lead ? lead_advantage : 1.0) * best_cv) best_cv = cv, best.tau = tau, best.lead = lead;
-    }
+  for (const double tau : grid) {
+    NodeModel trial = best;
+    trial.tau = tau;
+    const double cv = score(trial);
+    if (cv < best_cv) best_cv = cv, best.tau = tau;
   }
-  result.path.push_back({"node", fmt::format("{} {} s of {} on the grid", best.lead ? "lead" : "lag", best.tau, grid.size()),
-                         best_cv, best.terms()});
+  result.path.push_back({"node", fmt::format("lag {} s of {} on the grid", best.tau, grid.size()), best_cv, best.terms()});
 
   // A node with a second pole or a zero (nodehinge): a coil two nodes behind the sensor,
   // or on another thermal path than the sensor's (the sensor on another axis' block lags the
   // common source by TL, the coil by T1). Each must beat the single lag by min_gain: two
   // grids, the series pair with T2 <= T1 (the order of two lags does not matter).
-  if (!best.lead) {
+  {
     NodeModel structured = best;
     double structured_cv = kInfinity;
     for (const double t1 : grid) {
@@ -366,18 +359,16 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       ranked.emplace_back(score(trial), std::move(trial));
     };
     for (const auto& candidate : candidates) {
-      // A leading node has no lag for a Shupe term or a play to read.
-      const bool reads_lag = candidate.kind == DynamicTerm::Kind::gradient_rate || candidate.kind == DynamicTerm::Kind::play;
-      if (!(best.lead && reads_lag)) offer({candidate});
+      offer({candidate});
     }
     // A Shupe term and a memory (or a play) together: each alone is often beaten by a proxy that
     // then blocks the pair (the greedy search's lesson, docs/features.md).
     for (const double tg : {60.0, 120.0, 240.0, 480.0}) {
       for (const double td : {300.0, 600.0, 1200.0}) {
-        if (!best.lead) offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td}});
+        offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td}});
       }
       for (const double width : {0.5, 1.0, 2.0, 4.0}) {
-        if (!best.lead) offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::play, width}});
+        offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::play, width}});
       }
     }
     if (ranked.empty()) break;
@@ -397,7 +388,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     if (!(chosen_cv < std::pow(keep, static_cast<double>(added)) * best_cv)) break;
     std::string names;
     for (std::size_t i = best.dynamics.size(); i < chosen.dynamics.size(); ++i) {
-      names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.tau, chosen.lead);
+      names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.dynamics_tau());
     }
     best = std::move(chosen), best_cv = chosen_cv;
     result.path.push_back({"add", names, best_cv, best.terms()});
