@@ -35,7 +35,7 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// One model per axis on a 1 Hz cycle: the seed's pipeline, linear or ε-SVR with fixed
+// One model per axis on a 1 Hz cycle: the paper's pipeline, linear or ε-SVR with fixed
 // C = 10, γ = 0.5, ε = 0.05 (standardized units), as the export test fits them.
 DriftModel fit(const ChamberLog& log, const std::string& kind) {
   DriftModel model;

@@ -42,7 +42,7 @@ using namespace thermodrift::bench;
 
 namespace {
 
-constexpr double smoothing_s = 100;  // the seed's window: the floor is of data smoothed so
+constexpr double smoothing_s = 100;  // the paper's window: the floor is of data smoothed so
 constexpr double settle_s = 1800;    // lags start in equilibrium; the first 30 min are not judged
 
 std::atomic<bool> interrupted{false};  // the one thing a signal handler may touch

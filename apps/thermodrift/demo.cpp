@@ -20,7 +20,7 @@ namespace thermodrift::cli {
 namespace {
 
 struct DemoArguments {
-  std::vector<std::string> features;  // besides the seed's pair; empty: the pair only
+  std::vector<std::string> features;  // besides the paper's pair; empty: the pair only
   std::string out = "thermodrift-demo";
   std::uint64_t seed = 1;
   int threads = 2;
@@ -61,7 +61,7 @@ int run_demo(const DemoArguments& args) {
   options.seed = args.seed;
   options.threads = args.threads;
   options.study.calibration.svr.threads = args.threads;
-  // SVR + AFSA, as the seed: C and σ tuned per axis by blocked 5-fold CV on the training part.
+  // SVR + AFSA, as the paper: C and σ tuned per axis by blocked 5-fold CV on the training part.
   SvrTuningOptions tuning;
   tuning.threads = std::max(1, options.threads);
   tuning.seed = options.seed;
@@ -89,10 +89,10 @@ int run_demo(const DemoArguments& args) {
 
 Command add_demo(CLI::App& parent) {
   auto args = std::make_shared<DemoArguments>();
-  CLI::App* app = parent.add_subcommand("demo", "the seed's study on a simulated two-cycle chamber test, as an HTML report");
+  CLI::App* app = parent.add_subcommand("demo", "the paper's study on a simulated two-cycle chamber test, as an HTML report");
   app->add_option("--out", args->out, "folder for the log, models and report (default thermodrift-demo)");
   app->add_option("--seed", args->seed, "simulator seed");
-  app->add_option("--features", args->features, "feature terms to compare with the seed's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
+  app->add_option("--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
   app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(CLI::PositiveNumber);
   return {app, [args] { return run_demo(*args); }};
 }

@@ -62,7 +62,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     }
     options.svr.epsilon = args.epsilon;
     options.svr.tolerance = args.tolerance;
-    // The seed's method tunes C and σ; fixed values are used only when both are given.
+    // The paper's method tunes C and σ; fixed values are used only when both are given.
     const bool fixed = app.count("--C") && (app.count("--sigma") || app.count("--gamma"));
     if (!args.tune.empty() || !fixed) {
       SvrTuningOptions tuning;
@@ -157,7 +157,7 @@ Command add_fit(CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
       ->check(CLI::PositiveNumber);
-  app->add_option("--features", args->features, "feature terms (default dT,rate, the seed's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, products, powers), or auto to choose them per axis by blocked CV; docs/features.md")->delimiter(',');
+  app->add_option("--features", args->features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md")->delimiter(',');
   app->add_option("--identify", args->identify,
                   "with --features auto: thermal-node (default; one node's lags, a piecewise-linear map of its "
                   "temperature and linear dynamic terms) or greedy (a forward search over single terms); "

@@ -1,4 +1,4 @@
-// thermodrift report: the seed's whole study on a user's log, as DIR/report.html and
+// thermodrift report: the paper's whole study on a user's log, as DIR/report.html and
 // DIR/summary.json (docs/report.md).
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -21,7 +21,7 @@ namespace thermodrift::cli {
 namespace {
 
 struct ReportArguments {
-  std::vector<std::string> features;  // besides the seed's pair; empty: the pair only
+  std::vector<std::string> features;  // besides the paper's pair; empty: the pair only
   DataOptions data;
   std::string out;
   std::optional<double> holdout_fraction;
@@ -61,7 +61,7 @@ int run_report(const ReportArguments& args) {
   options.threads = args.threads;
   options.study.calibration.smooth_seconds = args.data.smooth;
   options.study.calibration.svr.threads = std::max(1, args.threads);
-  // SVR + AFSA, as the seed: C and σ tuned per axis by blocked 5-fold CV on the training part.
+  // SVR + AFSA, as the paper: C and σ tuned per axis by blocked 5-fold CV on the training part.
   SvrTuningOptions tuning;
   tuning.threads = std::max(1, options.threads);
   tuning.seed = options.seed;
@@ -131,7 +131,7 @@ void print_report_tables(const nlohmann::json& summary) {
 
 Command add_report(CLI::App& parent) {
   auto args = std::make_shared<ReportArguments>();
-  CLI::App* app = parent.add_subcommand("report", "the seed's study on a log: tables, figures, report.html, summary.json");
+  CLI::App* app = parent.add_subcommand("report", "the paper's study on a log: tables, figures, report.html, summary.json");
   args->data.add_to(*app);
   app->add_option("--out", args->out, "folder for report.html, summary.json, figures and models")->required();
   auto* fraction = app->add_option_function<double>(
@@ -141,7 +141,7 @@ Command add_report(CLI::App& parent) {
                                    "hold out the log from this time (s) on")
       ->excludes(fraction);
   app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)");
-  app->add_option("--features", args->features, "feature terms to compare with the seed's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
+  app->add_option("--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
   app->add_option("--threads", args->threads, "threads for the SVR fits")->check(CLI::PositiveNumber);
   app->add_option("--evaluations", args->evaluations, "AFSA budget of objective evaluations per axis (default 100)")
       ->check(CLI::PositiveNumber);

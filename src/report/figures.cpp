@@ -209,7 +209,7 @@ FigureOutcome draw_figures(const FigureInputs& in, const std::string& dir, const
                                  file, a, label(in.model_labels.empty() ? "own axis" : in.model_labels[in.svr_index] + ", own axis"));
     }
     script.end();
-    outcome.figures.push_back({"cross_axis.svg", "Cross-axis experiment (the seed's Fig. 3)",
+    outcome.figures.push_back({"cross_axis.svg", "Cross-axis experiment (the paper's Fig. 3)",
                                "An SVR trained on the pooled samples of the other axes, tested on the axis left out,"
                                " beside that axis's own SVR."});
   }

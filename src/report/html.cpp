@@ -135,7 +135,7 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
        << split["held_out_rows"].get<std::size_t>() << " rows from t = " << num(split["time_s"]) << " s on.</p>\n";
   page << verdict(summary, floor_known);
 
-  page << "<h2>Residual MSE of the smoothed drift (the seed's Table 1)</h2>\n"
+  page << "<h2>Residual MSE of the smoothed drift (the paper's Table 1)</h2>\n"
           "<p>MSE of the original drift is its variance (what removing a constant bias leaves); each model column is "
           "the mean square of the smoothed output minus the predicted drift, with the residual's standard deviation "
           "and peak-to-peak beside it.";

@@ -30,7 +30,7 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 
 std::string model_kind_label(const ModelStudy& m, std::size_t axis);
 
-// "SVR + AFSA", with the feature terms when they are not the seed's pair.
+// "SVR + AFSA", with the feature terms when they are not the paper's pair.
 std::string model_label(const ModelStudy& m, std::size_t axis) {
   const std::string kind = model_kind_label(m, axis);
   if (m.features == "dT,rate") return kind;
@@ -138,7 +138,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   const bool known_drift = options.true_drift.size() == axes && axes > 0;
   std::size_t svr_index = study.models.size();
   for (std::size_t m = 0; m < study.models.size(); ++m) {
-    if (study.models[m].model == "svr" && svr_index == study.models.size()) svr_index = m;  // the seed's pair
+    if (study.models[m].model == "svr" && svr_index == study.models.size()) svr_index = m;  // the paper's pair
   }
 
   // Cross-axis experiment with the SVR's options.

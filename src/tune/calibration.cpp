@@ -77,7 +77,7 @@ Pipeline make_pipeline(const std::vector<ChamberLog>& logs, std::size_t axis,
   pipeline.decimation =
       options.decimation.value_or(default_decimation(options.smooth_seconds, median_sample_interval(logs.front())));
   pipeline.terms.clear();
-  // "auto": the seed's pair until select_features replaces it.
+  // "auto": the paper's pair until select_features replaces it.
   const auto terms = chooses_features(options) ? std::vector<std::string>{"dT", "rate"} : options.terms;
   for (const auto& term : terms) pipeline.terms.push_back(FeatureTerm::parse(term));
   // ΔT is measured from the mean temperature of the training logs.

@@ -309,7 +309,7 @@ FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_
   refine_and_record(4 * options.refine_budget);
   if (drop_while_it_pays()) refine_and_record(4 * options.refine_budget);
 
-  if (current.terms.empty()) current.terms = {"dT", "rate"};  // nothing pays: the seed's pair
+  if (current.terms.empty()) current.terms = {"dT", "rate"};  // nothing pays: the paper's pair
   result.terms = current.terms;
   result.cv_mse = current.cv;
   return result;

@@ -96,7 +96,7 @@ TEST_F(Workflow, FitJsonIsOneObjectWithThreeAxes) {
     EXPECT_TRUE(axis.contains("params"));
     EXPECT_TRUE(axis.contains("evaluations"));
     EXPECT_TRUE(axis.contains("seconds"));
-    EXPECT_EQ(axis.at("terms"), nlohmann::json::array({"dT", "rate"}));  // the seed's pair by default
+    EXPECT_EQ(axis.at("terms"), nlohmann::json::array({"dT", "rate"}));  // the paper's pair by default
     EXPECT_FALSE(axis.contains("feature_selection"));
     EXPECT_LT(axis.at("mse_after").get<double>(), axis.at("mse_before").get<double>());
   }

@@ -39,7 +39,7 @@ struct Pipeline {
   std::vector<std::string> term_names() const;
   // The temperature channels (0-based, sorted, distinct) its grad terms read.
   std::vector<std::size_t> channels() const;
-  // The longest time constant of its terms, s (0 for the seed's pair).
+  // The longest time constant of its terms, s (0 for the paper's pair).
   double longest_time_constant() const;
   void validate() const;  // UsageError on nonsense (negative window, no terms, ...)
 

@@ -1,5 +1,5 @@
 // Linear-in-parameters drift models: ordinary least squares by QR and stepwise
-// regression (the seed's reference baseline), each with an intercept.
+// regression (the paper's reference baseline), each with an intercept.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -22,10 +22,10 @@ struct Regressor {
   static Regressor parse(const std::string& text, const std::vector<std::string>& term_names);
 };
 
-// Each term alone: the plain linear model of the seed's comparison.
+// Each term alone: the plain linear model of the paper's comparison.
 std::vector<Regressor> linear_regressors(std::size_t term_count);
 // Terms, their squares and pairwise products: the stepwise candidate set
-// (for the seed's pair: dT, rate, dT², rate², dT·rate).
+// (for the paper's pair: dT, rate, dT², rate², dT·rate).
 std::vector<Regressor> quadratic_regressors(std::size_t term_count);
 
 struct LinearModel {

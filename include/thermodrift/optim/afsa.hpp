@@ -1,4 +1,4 @@
-// The Artificial Fish Swarm Algorithm (Li Xiaolei, 2002) as the seed paper uses it to
+// The Artificial Fish Swarm Algorithm (Li Xiaolei, 2002) as the paper uses it to
 // pick (C, σ), plus the common adaptive variant whose visual range and step shrink over
 // the run. docs/optim.md states the algorithm as implemented.
 #pragma once
@@ -15,7 +15,7 @@ class Afsa {
   // How visual range and step go from their initial values (iteration 0) to their
   // floors (last iteration).
   enum class Schedule {
-    constant,     // the seed's AFSA: r and λ fixed, the floors are unused
+    constant,     // the paper's AFSA: r and λ fixed, the floors are unused
     linear,       // r_t = r + (r_floor - r) t/(T-1)
     exponential,  // r_t = r (r_floor / r)^(t/(T-1)): halves at a steady rate, fine steps late
   };

@@ -1,4 +1,4 @@
-// The seed's cross-axis experiment (its Fig. 3): one SVR trained on the pooled samples of
+// The paper's cross-axis experiment (its Fig. 3): one SVR trained on the pooled samples of
 // every axis but one, tested on the axis left out. It tells whether the axes share one
 // drift law; in the paper, and usually, they do not.
 #pragma once

@@ -1,4 +1,4 @@
-// The report of the seed's study on one log: the study (report/study.hpp), the
+// The report of the paper's study on one log: the study (report/study.hpp), the
 // cross-axis experiment, compensation of every axis, Allan deviation before and after,
 // gnuplot SVG figures, DIR/report.html (one self-contained page) and DIR/summary.json
 // (the same numbers). docs/report.md describes what is in it and why.

@@ -1,4 +1,4 @@
-// The seed's study on one log: per axis, each model fitted on the earlier part of the
+// The paper's study on one log: per axis, each model fitted on the earlier part of the
 // log and judged both in-sample (as the paper reports) and on the later, held-out part
 // (blocked in time; features streamed through from the start of the log, so the lags and
 // the smoothing enter the held-out part as they would on a running device).
@@ -23,8 +23,8 @@ struct StudyOptions {
   double holdout_fraction = 0.3;            // used when split_row is not given
   std::string split_description;            // how the split was chosen, in words; default: from the above
   std::function<void(const std::string&)> progress;  // one line per step; may be empty
-  // Other feature terms (or {"auto"}) to fit every model with as well, beside the seed's
-  // pair, so the report shows both side by side. Empty: the seed's pair only.
+  // Other feature terms (or {"auto"}) to fit every model with as well, beside the paper's
+  // pair, so the report shows both side by side. Empty: the paper's pair only.
   std::vector<std::string> other_terms;
 };
 

@@ -30,7 +30,7 @@ struct AxisModel {
 };
 
 // The three default axes. They differ in every coefficient and time constant, some in
-// sign, so the axes do not share one drift law (the seed's cross-axis experiment).
+// sign, so the axes do not share one drift law (the paper's cross-axis experiment).
 std::array<AxisModel, 3> default_axis_models();
 
 // Rate noise of every axis (same for all three) and of the temperature sensors.

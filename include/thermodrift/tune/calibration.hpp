@@ -1,4 +1,4 @@
-// Calibration: from chamber logs to a drift model, one model per gyro axis (the seed's
+// Calibration: from chamber logs to a drift model, one model per gyro axis (the paper's
 // self-regression). Joins the feature pipeline, the models and, for SVR, the tuner.
 #pragma once
 
@@ -24,7 +24,7 @@ struct CalibrationOptions {
   double smooth_seconds = 100;             // moving-average window (seed: 100 s)
   std::optional<double> rate_span_seconds; // dT/dt span; default: the smoothing window (at least 1 s)
   std::optional<std::size_t> decimation;   // default: about 10 samples per smoothing window
-  std::vector<std::string> terms{"dT", "rate"};  // feature terms (the seed's pair); {"auto"}: chosen per axis
+  std::vector<std::string> terms{"dT", "rate"};  // feature terms (the paper's pair); {"auto"}: chosen per axis
   SvrOptions svr;                          // C, gamma, epsilon, tolerance for --model svr (standardized units)
   std::optional<SvrTuningOptions> tuning;  // tune C, σ (and ε) per axis instead of using `svr`'s
   // Progress of the tuning of axis `axis` (0-based); returning false stops the run.

@@ -5,7 +5,7 @@
 //   cv      blocked k-fold: fold k is a contiguous block of the time-ordered samples;
 //           train on the rest (both sides of the block), MSE on the block; mean over folds.
 //   holdout train on the first (1 - f) of the samples, MSE on the last f.
-//   train   in-sample MSE of one fit on every sample: the seed's choice, optimistic.
+//   train   in-sample MSE of one fit on every sample: the paper's choice, optimistic.
 //
 // Samples of a time series are never shuffled: neighbours of a 100 s moving average are
 // near copies, so a shuffled fold would score interpolation, not prediction.

@@ -72,7 +72,7 @@ TEST(NoiseFloor, MatchesTheNoiseModelAndFallsWithTheWindow) {
     }
     previous = *std::min_element(floor.begin(), floor.end());
   }
-  // At the seed's 100-s smoothing: white 0.18²/100 plus most of the 0.0107² bias variance.
+  // At the paper's 100-s smoothing: white 0.18²/100 plus most of the 0.0107² bias variance.
   EXPECT_NEAR(expected_noise_floor(noise, 1.0, 100.0), 4.3e-4, 0.2e-4);
 }
 

@@ -1,5 +1,5 @@
 // The noise floor estimated from a log alone (features/noise_floor.hpp) against the
-// simulator's true floor, which knows the drift. On the default run at the seed's 100 s
+// simulator's true floor, which knows the drift. On the default run at the paper's 100 s
 // window the estimate was measured at -24 % .. -5 % over five seeds and three axes
 // (docs/design.md); it misses part of the Gauss-Markov bias, so it is low more often than high.
 #include "thermodrift/features/noise_floor.hpp"

@@ -144,7 +144,7 @@ TEST(Simulate, DriftPeakToPeakIsNavigationGrade) {
 }
 
 TEST(Simulate, AxesDoNotShareOneDriftLaw) {
-  // The seed's cross-axis experiment: a law fitted on x and y does not describe z.
+  // The paper's cross-axis experiment: a law fitted on x and y does not describe z.
   const ChamberRun run = simulate(SimulatorOptions{});
   const std::size_t first = 200;
   Eigen::MatrixXd x_xy(2 * (run.rows() - first), 4);
@@ -181,7 +181,7 @@ TEST(Simulate, SensorTemperatureAloneLeavesAHeatingCoolingLoop) {
     ASSERT_LT(cooling, run.cycle_start_rows()[1]);
     EXPECT_GT(std::abs(drift[heating] - drift[cooling]), 0.3) << axis;
 
-    // The seed's polynomial-and-rate model on the logged temperature cannot follow the
+    // The paper's polynomial-and-rate model on the logged temperature cannot follow the
     // coil: even in-sample and noise-free its residual stays far above the 100-s noise
     // floor (by default about 8x in RMS on x, the least affected axis).
     const std::size_t first = 200;

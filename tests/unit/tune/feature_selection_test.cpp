@@ -103,7 +103,7 @@ TEST(FeatureSelection, FindsTheCoilLagAndItsTimeConstant) {
   EXPECT_LT(chosen.cv_mse, 1e-3 * chosen.start_mse) << names;
   ASSERT_FALSE(chosen.path.empty());
   EXPECT_EQ(chosen.path.back().terms, chosen.terms);
-  // The seed's pair on the same data, scored the same way, stays far above.
+  // The paper's pair on the same data, scored the same way, stays far above.
   FeatureSelectionOptions seed_only;
   seed_only.max_terms = 0;
   EXPECT_EQ(select_features({log}, 0, seed_pipeline(), seed_only).terms, (std::vector<std::string>{"dT", "rate"}));
