@@ -66,6 +66,7 @@ int run_demo(const DemoArguments& args) {
   tuning.threads = std::max(1, options.threads);
   tuning.seed = options.seed;
   options.study.calibration.tuning = tuning;
+  options.study.calibration.selection.threads = tuning.threads;  // axes searched at once
   options.study.other_terms = args.features;
   options.study.split_row = run.cycle_start_rows().back();
   options.study.split_description = fmt::format("fitted on chamber cycle 1, held out: cycle 2 (from t = {:g} s)",

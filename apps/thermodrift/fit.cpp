@@ -49,6 +49,8 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   options.terms = args.features;
   if (args.identify == "greedy") options.selection.method = FeatureSelectionOptions::Method::greedy;
   options.selection.proceed = [] { return !interrupt_requested(); };
+  options.selection.threads =
+      args.threads > 0 ? args.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   if (args.model == "svr") {
     if (app.count("--sigma") && app.count("--gamma")) {
       throw UsageError("give --sigma or --gamma, not both (gamma = 1/(2 sigma²))");
@@ -172,7 +174,7 @@ Command add_fit(CLI::App& parent) {
   app->add_option("--folds", args->folds, "folds of the blocked cross-validation (default 5)")->check(CLI::Range(2, 100));
   app->add_flag("--tune-epsilon", args->tune_epsilon, "tune ε as well");
   app->add_option("--seed", args->seed, "seed of the tuner's random choices");
-  app->add_option("--threads", args->threads, "threads for tuning (default: all cores); results do not depend on it")
+  app->add_option("--threads", args->threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")
       ->check(CLI::PositiveNumber);
   app->add_option("--out", args->out, "model file to write")->required();
   app->add_flag("--json", args->json, "print one JSON object on stdout");

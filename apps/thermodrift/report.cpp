@@ -67,6 +67,7 @@ int run_report(const ReportArguments& args) {
   tuning.seed = options.seed;
   tuning.evaluations = args.evaluations;
   options.study.calibration.tuning = tuning;
+  options.study.calibration.selection.threads = tuning.threads;  // axes searched at once
   options.study.other_terms = args.features;
   if (args.split_time) {
     const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time) - log.time.begin();

@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <atomic>
 #include <chrono>
+#include <exception>
+#include <thread>
 #include <algorithm>
 #include <cmath>
 
@@ -144,9 +147,26 @@ FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_
 std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
                                                        const CalibrationOptions& options) {
   if (logs.empty()) throw UsageError("no log to choose features on");
-  std::vector<FeatureSelection> selections;
-  for (std::size_t axis = 0; axis < logs.front().axes(); ++axis) {
-    selections.push_back(search_features(logs, axis, make_pipeline(logs, axis, options), options));
+  const std::size_t axes = logs.front().axes();
+  std::vector<FeatureSelection> selections(axes);
+  std::vector<std::exception_ptr> failures(axes);
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t axis; (axis = next++) < axes;) {
+      try {
+        selections[axis] = search_features(logs, axis, make_pipeline(logs, axis, options), options);
+      } catch (...) {
+        failures[axis] = std::current_exception();
+      }
+    }
+  };
+  const std::size_t threads = std::clamp<std::size_t>(static_cast<std::size_t>(std::max(1, options.selection.threads)), 1, axes);
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& thread : pool) thread.join();
+  for (const auto& failure : failures) {
+    if (failure) std::rethrow_exception(failure);  // the first axis' error, whatever the thread count
   }
   return selections;
 }
@@ -299,6 +319,11 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
   calibration.model.rate_hz = spec.rate_hz;
   const auto channels = temperature_channel_per_axis(first);
 
+  // The searches of all axes at once when they may run in parallel (the given ones if any).
+  std::vector<FeatureSelection> searched = options.selections;
+  if (chooses_features(options) && searched.empty() && options.selection.threads > 1) {
+    searched = select_features_per_axis(logs, options);
+  }
   for (std::size_t axis = 0; axis < first.axes(); ++axis) {
     const auto start = std::chrono::steady_clock::now();
     AxisModel axis_model;
@@ -313,9 +338,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     nlohmann::json selection_json;
     if (chooses_features(options)) {
       const FeatureSelectionOptions& selection_options = options.selection;
-      FeatureSelection selection = axis < options.selections.size()
-                                       ? options.selections[axis]
-                                       : search_features(logs, axis, axis_model.pipeline, options);
+      FeatureSelection selection = axis < searched.size() ? searched[axis] : search_features(logs, axis, axis_model.pipeline, options);
       if (options.model == "svr" && selection_options.method == FeatureSelectionOptions::Method::greedy) {
         if (options.selection_progress) options.selection_progress(axis, "judging the chosen terms by SVR");
         SvrJudgeOptions judge;

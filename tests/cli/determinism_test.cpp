@@ -34,5 +34,21 @@ TEST(Determinism, TunedSvrModelFileIsByteIdenticalWhateverTheThreadCount) {
   EXPECT_NE(one, read_file(dir.file("other.json")));
 }
 
+// The feature search runs the axes in parallel with --threads > 1: the same terms and
+// coefficients as one axis after another.
+TEST(Determinism, FeatureSearchGivesTheSameModelWhateverTheThreadCount) {
+  TempDir dir;
+  ASSERT_EQ(run(dir, "simulate --cycles 1 --rate 0.25 --seed 7 --out log.csv").status, 0);
+  const std::string fit =
+      "fit --data log.csv --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z --model linear --features auto ";
+  for (const char* threads : {"1", "3"}) {
+    const auto result = run(dir, fit + "--threads " + threads + " --out t" + threads + ".json");
+    ASSERT_EQ(result.status, 0) << result.err;
+  }
+  const std::string one = read_file(dir.file("t1.json"));
+  ASSERT_NE(one.find("\"feature_selection\""), std::string::npos);  // the terms were searched
+  EXPECT_EQ(one, read_file(dir.file("t3.json")));
+}
+
 }  // namespace
 }  // namespace thermodrift::testing

@@ -34,7 +34,11 @@ struct FeatureSelectionOptions {
   double max_time_constant = 5400;    // s: and stops here or at a quarter of the training span
   std::size_t max_dynamic_terms = 3;  // thermal_node: at most one Shupe term, one memory, one second lag
   // thermal_node: asked before each set is scored; false stops the search with Interrupted.
+  // With threads > 1 it is asked from several threads at once.
   std::function<bool()> proceed;
+  // Axes searched at once by select_features_per_axis (and so by calibrate); each axis'
+  // search is independent, so the result does not depend on it.
+  int threads = 1;
   // Blocked CV: contiguous blocks in time. Ten, not the tuning's five: with five, each
   // block is a whole regime of a chamber cycle (the hot soak, the cold ramp), and terms
   // that happen to extrapolate into it win over the physical ones (docs/features.md).
