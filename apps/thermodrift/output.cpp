@@ -5,23 +5,16 @@
 #include <cstdio>
 
 #include "thermodrift/features/envelope.hpp"
+#include "thermodrift/tune/calibration.hpp"
 
 namespace thermodrift::cli {
 
 void add_expected_held_out(nlohmann::json& axis, const nlohmann::json& fit) {
-  nlohmann::json expected;
-  if (fit.contains("tuning") && fit["tuning"].value("objective", "") == "cv") {
-    expected = {{"cv_mse", fit["tuning"]["objective_mse"]},
-                {"from", fmt::format("the tuned SVR's blocked {}-fold CV", fit["tuning"].value("folds", 0))}};
-  } else if (fit.contains("feature_selection")) {
-    expected = {{"cv_mse", fit["feature_selection"]["cv_mse"]},
-                {"from", fmt::format("the feature search's blocked {}-fold least-squares CV",
-                                     fit["feature_selection"].value("folds", 0))}};
-  } else {
-    return;
-  }
+  const auto estimate = expected_held_out(fit);
+  if (!estimate) return;
+  nlohmann::json expected = {{"cv_mse", estimate->cv_mse}, {"from", estimate->from}};
   if (axis.contains("noise_floor_estimate")) {
-    expected["x_floor_estimate"] = expected["cv_mse"].get<double>() / axis["noise_floor_estimate"].get<double>();
+    expected["x_floor_estimate"] = estimate->cv_mse / axis["noise_floor_estimate"].get<double>();
   }
   axis["expected_held_out"] = expected;
 }

@@ -65,6 +65,27 @@ void table(std::ostringstream& page, const nlohmann::json& t, bool floor_known, 
   page << "</table>\n";
 }
 
+// What each model's blocked CV on the training part expected, against what the held-out
+// part gave: how far the estimate `fit` prints can be trusted on this log.
+void expected_against_held_out(std::ostringstream& page, const nlohmann::json& t) {
+  std::ostringstream rows;
+  for (const auto& row : t["rows"]) {
+    for (std::size_t i = 0; i < row["models"].size(); ++i) {
+      const auto& cell = row["models"][i];
+      if (!cell.contains("expected_mse")) continue;
+      rows << "<tr><td>" << escape(row["axis"].get<std::string>()) << "</td><td>"
+           << escape(t["columns"][i]["label"].get<std::string>()) << "</td><td>" << num(cell["expected_mse"])
+           << "</td><td>" << num(cell["mse"]) << "</td><td>" << escape(cell["expected_from"].get<std::string>())
+           << "</td></tr>\n";
+    }
+  }
+  if (rows.str().empty()) return;
+  page << "<table>\n<caption>Expected held-out MSE (blocked CV on the training part, as <code>fit</code> prints it) "
+          "against the held-out MSE</caption>\n<tr><th>axis</th><th>model</th><th>expected (°/h)²</th>"
+          "<th>held-out (°/h)²</th><th>expected from</th></tr>\n"
+       << rows.str() << "</table>\n";
+}
+
 // The paragraph saying which table to believe, with this log's numbers.
 std::string verdict(const nlohmann::json& summary, bool floor_known) {
   const auto& in = summary["tables"]["in_sample"];
@@ -143,16 +164,29 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
   page << "</p>\n";
   table(page, summary["tables"]["in_sample"], floor_known, "Table 1 — in-sample (fitted and judged on the training part, as the paper reports)");
   table(page, summary["tables"]["held_out"], floor_known, "Table 2 — held-out (judged on the later part the models never saw)");
+  expected_against_held_out(page, summary["tables"]["held_out"]);
 
   if (summary.contains("feature_selection") && !summary["feature_selection"].empty()) {
     const auto& first = summary["feature_selection"][0]["selection"];
-    page << "<h2>Feature selection</h2>\n<p>Terms chosen per axis on the training part by forward selection over "
-            "lags and thermal terms, scored by the blocked cross-validation MSE of least squares (time constants "
-            "refined as each candidate is tried); a term is kept only if it cuts that MSE by more than "
-         << num(100.0 * first["min_gain"].get<double>())
-         << " %. For the SVR, the last sets the search settled on are then judged by an AFSA-tuned SVR's own "
-            "blocked CV (<code>svr</code> steps), with the same penalty (docs/features.md). These CV figures are "
-            "selection scores on the training part; the held-out table says how well the terms generalize.</p>\n";
+    if (first.value("method", "greedy") == "thermal_node") {
+      page << "<h2>Feature selection</h2>\n<p>Terms identified per axis on the training part as one thermal "
+              "node: its lag (or two lags in series, or a lag with a lead) on a grid limited to what the log can "
+              "identify, a piecewise-linear map of its temperature, its rate and the sensor's, then a Shupe term, "
+              "a memory, a play or a second lag while each cuts the blocked cross-validation MSE of least squares "
+              "by more than "
+           << num(100.0 * first["min_gain"].get<double>())
+           << " %, every time constant refined (docs/features.md). For the SVR the terms are its linear part and "
+              "the kernel fits the residual. These CV figures are selection scores on the training part; the "
+              "held-out table says how well the terms generalize.</p>\n";
+    } else {
+      page << "<h2>Feature selection</h2>\n<p>Terms chosen per axis on the training part by forward selection over "
+              "lags and thermal terms, scored by the blocked cross-validation MSE of least squares (time constants "
+              "refined as each candidate is tried); a term is kept only if it cuts that MSE by more than "
+           << num(100.0 * first["min_gain"].get<double>())
+           << " %. For the SVR, the last sets the search settled on are then judged by an AFSA-tuned SVR's own "
+              "blocked CV (<code>svr</code> steps), with the same penalty (docs/features.md). These CV figures are "
+              "selection scores on the training part; the held-out table says how well the terms generalize.</p>\n";
+    }
     for (const auto& entry : summary["feature_selection"]) {
       const auto& selection = entry["selection"];
       page << "<table><caption>" << escape(entry["axis"].get<std::string>()) << " ("

@@ -296,6 +296,12 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
         cell["model"] = study.models[m].model;
         cell["features"] = study.models[m].features;
         cell["terms"] = study.models[m].calibration.model.axes[a].pipeline.term_names();
+        // Beside the held-out figure, what the training part's blocked CV expected of it.
+        const auto expected = expected_held_out(study.models[m].calibration.model.axes[a].fit);
+        if (is_held_out && expected) {
+          cell["expected_mse"] = expected->cv_mse;
+          cell["expected_from"] = expected->from;
+        }
         cells.push_back(cell);
       }
       row["models"] = cells;

@@ -171,6 +171,19 @@ std::vector<FeatureSelection> select_features_per_axis(const std::vector<Chamber
   return selections;
 }
 
+std::optional<ExpectedHeldOut> expected_held_out(const nlohmann::json& fit) {
+  if (fit.contains("tuning") && fit["tuning"].value("objective", "") == "cv") {
+    return ExpectedHeldOut{fit["tuning"]["objective_mse"].get<double>(),
+                           fmt::format("the tuned SVR's blocked {}-fold CV", fit["tuning"].value("folds", 0))};
+  }
+  if (fit.contains("feature_selection")) {
+    return ExpectedHeldOut{fit["feature_selection"]["cv_mse"].get<double>(),
+                           fmt::format("the feature search's blocked {}-fold least-squares CV",
+                                       fit["feature_selection"].value("folds", 0))};
+  }
+  return std::nullopt;
+}
+
 bool chooses_features(const CalibrationOptions& options) {
   return options.terms.size() == 1 && options.terms.front() == "auto";
 }

@@ -106,7 +106,8 @@ nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options)
   for (const auto& step : path) {
     steps.push_back({{"action", step.action}, {"term", step.term}, {"cv_mse", step.cv_mse}, {"terms", step.terms}});
   }
-  return {{"scored_by", scored_by},
+  return {{"method", options.method == FeatureSelectionOptions::Method::thermal_node ? "thermal_node" : "greedy"},
+          {"scored_by", scored_by},
           {"folds", options.folds},
           {"min_gain", options.min_gain},
           {"start_mse", start_mse},

@@ -150,6 +150,18 @@ void summary_numbers_are_those_on_the_page(const std::string& html, const nlohma
     }
   }
   EXPECT_EQ(checked, 2U * 3U * (2U + 3U * 4U));
+  // The tuned SVR's blocked CV on the training part, beside what the held-out part gave.
+  std::size_t expected = 0;
+  for (const auto& row : s["tables"]["held_out"]["rows"]) {
+    for (const auto& cell : row["models"]) {
+      if (!cell.contains("expected_mse")) continue;
+      EXPECT_GT(cell["expected_mse"].get<double>(), 0.0);
+      EXPECT_NE(html.find(">" + format_number(cell["expected_mse"].get<double>()) + "<"), std::string::npos);
+      ++expected;
+    }
+  }
+  EXPECT_EQ(expected, 3U) << "one per axis: the SVR is tuned by CV, the paper's linear fits are not";
+  EXPECT_NE(html.find("Expected held-out MSE"), std::string::npos);
   for (const auto& c : s["cross_axis"]) {
     EXPECT_NE(html.find(">" + format_number(c["held_out_mse"].get<double>()) + "<"), std::string::npos);
   }

@@ -43,6 +43,15 @@ struct CalibrationOptions {
 // True when options.terms is {"auto"}: calibrate chooses terms per axis (tune/feature_selection.hpp).
 bool chooses_features(const CalibrationOptions& options);
 
+// What an axis' fit expects held out: the blocked-CV MSE (°/h)² its choices were scored by
+// (the tuned SVR's CV, else the feature search's least-squares CV) and where it comes from.
+// A selection score on the training data, so an estimate, not a held-out measurement.
+struct ExpectedHeldOut {
+  double cv_mse = 0;
+  std::string from;
+};
+std::optional<ExpectedHeldOut> expected_held_out(const nlohmann::json& fit);
+
 // The least-squares selection of every axis of `logs` (terms {"auto"}), with the
 // pipeline calibrate would build; the study shares it among the models it fits.
 std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
