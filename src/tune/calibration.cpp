@@ -202,7 +202,10 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
   if (options.model == "linear") {
     fitted.model = fit_least_squares(features, target, linear_regressors(terms.size()));
   } else if (options.model == "stepwise") {
-    auto stepwise = fit_stepwise(features, target, quadratic_regressors(terms.size()), terms);
+    auto stepwise = fit_stepwise(features, target,
+                                 options.partially_linear ? linear_regressors(terms.size())
+                                                          : quadratic_regressors(terms.size()),
+                                 terms);
     nlohmann::json path = nlohmann::json::array();
     for (const auto& step : stepwise.path) {
       path.push_back({{"action", step.action}, {"regressor", step.regressor}, {"F", step.f_statistic}});

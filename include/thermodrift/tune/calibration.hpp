@@ -33,8 +33,11 @@ struct CalibrationOptions {
   // fitting several models shares one search); empty: calibrate searches.
   std::vector<FeatureSelection> selections;
   FeatureSelectionOptions selection;       // how terms {"auto"} are identified
-  // svr: least squares on the terms, the SVR on its residual (SvrModel::linear_part). Set
-  // by calibrate with --identify thermal-node, whose terms are built for a linear fit.
+  // Set by calibrate for terms the thermal node identified, which are built for a linear
+  // fit: svr fits least squares on the terms and the SVR on its residual
+  // (SvrModel::linear_part); stepwise chooses among the terms themselves, without the
+  // squares and products it adds to other terms (products of hinges extrapolate as
+  // parabolas: z of the demo went from 1.6x to 27x the floor held out with them).
   bool partially_linear = false;
   // A line of progress of axis `axis` outside tuning (feature selection); may be empty.
   std::function<void(std::size_t axis, const std::string&)> selection_progress;

@@ -7,8 +7,10 @@
 
 #include <cstdio>
 #include <string>
+#include <variant>
 #include <vector>
 
+#include "thermodrift/models/linear.hpp"
 #include "thermodrift/sim/law_family.hpp"
 #include "thermodrift/tune/calibration.hpp"
 
@@ -108,6 +110,31 @@ TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
   ASSERT_TRUE(has_atom(calibration.model.axes[2].pipeline, FeatureAtom::Kind::play, &width));
   EXPECT_GT(width, 1.0);
   EXPECT_LT(width, 4.0);
+}
+
+// Stepwise on identified terms chooses among the terms themselves: no squares or products
+// of hinges, which extrapolate as parabolas. On other terms it still offers them.
+TEST(ThermalNode, StepwiseOnIdentifiedTermsOffersNoProducts) {
+  const sim::UnitLaw unit = known_unit();
+  const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 1), 4);
+  const ChamberLog log = sim::to_chamber_log(run);
+  CalibrationOptions options;
+  options.model = "stepwise";
+  options.terms = {"lag:700", "hinge:700:-10", "hinge:700:10", "lagrate:700", "rate"};
+  for (const bool identified : {true, false}) {
+    options.partially_linear = identified;
+    const Calibration calibration = calibrate({log}, LogSpec{}, options);
+    bool products = false;
+    for (const auto& axis : calibration.model.axes) {
+      const auto& linear = std::get<LinearModel>(axis.model);
+      for (const auto& regressor : linear.regressors) {
+        int degree = 0;
+        for (const int power : regressor.powers) degree += power;
+        products = products || degree > 1;
+      }
+    }
+    EXPECT_EQ(products, !identified) << (identified ? "identified terms" : "given terms");
+  }
 }
 
 }  // namespace
