@@ -67,4 +67,18 @@ std::vector<ChamberLog> DataOptions::read(const LogSpec& spec) const {
   return logs;
 }
 
+void add_identify_option(CLI::App& app, FeatureSelectionOptions::Method& method) {
+  app.add_option_function<std::string>(
+         "--identify",
+         [&method](const std::string& name) {
+           method = name == "greedy" ? FeatureSelectionOptions::Method::greedy
+                                     : FeatureSelectionOptions::Method::thermal_node;
+         },
+         "with --features auto: thermal-node (default; one node's lags, a piecewise-linear map of its "
+         "temperature and linear dynamic terms) or greedy (a forward search over single terms); "
+         "docs/features.md")
+      ->check(CLI::IsMember({"thermal-node", "greedy"}))
+      ->option_text("thermal-node|greedy");
+}
+
 }  // namespace thermodrift::cli

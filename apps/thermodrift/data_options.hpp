@@ -9,6 +9,7 @@
 
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/models/model_file.hpp"
+#include "thermodrift/tune/feature_selection.hpp"
 
 namespace thermodrift::cli {
 
@@ -34,6 +35,10 @@ struct DataOptions {
   // Reads every --data file; warnings (skipped banners, dropped rows) go to stderr.
   std::vector<ChamberLog> read(const LogSpec& spec) const;
 };
+
+// Declares --identify thermal-node|greedy (how `--features auto` finds the terms) for fit,
+// report and demo.
+void add_identify_option(CLI::App& app, FeatureSelectionOptions::Method& method);
 
 // "thermodrift: warning: ..." on stderr.
 void warn(const std::string& message);

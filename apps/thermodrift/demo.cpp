@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "data_options.hpp"
 #include "report_command.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/report/report.hpp"
@@ -21,6 +22,7 @@ namespace {
 
 struct DemoArguments {
   std::vector<std::string> features;  // besides the paper's pair; empty: the pair only
+  FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
   std::string out = "thermodrift-demo";
   std::uint64_t seed = 1;
   int threads = 2;
@@ -67,6 +69,7 @@ int run_demo(const DemoArguments& args) {
   tuning.seed = options.seed;
   options.study.calibration.tuning = tuning;
   options.study.calibration.selection.threads = tuning.threads;  // axes searched at once
+  options.study.calibration.selection.method = args.identify;
   options.study.other_terms = args.features;
   options.study.split_row = run.cycle_start_rows().back();
   options.study.split_description = fmt::format("fitted on chamber cycle 1, held out: cycle 2 (from t = {:g} s)",
@@ -74,6 +77,7 @@ int run_demo(const DemoArguments& args) {
   options.title = "thermodrift demo — simulated 3-axis FOG, two chamber cycles";
   options.command_line = fmt::format("thermodrift demo --out {} --seed {}", args.out, args.seed);
   if (!args.features.empty()) options.command_line += fmt::format(" --features {}", fmt::join(args.features, ","));
+  if (args.identify == FeatureSelectionOptions::Method::greedy) options.command_line += " --identify greedy";
   for (const char* name : {"drift_x", "drift_y", "drift_z"}) options.true_drift.push_back(run.column(name));
   options.earlier_steps = {{"simulate and write the log", simulate_seconds}, {"read the log", seconds_since(read_start)}};
   options.progress = progress;
@@ -94,6 +98,7 @@ Command add_demo(CLI::App& parent) {
   app->add_option("--out", args->out, "folder for the log, models and report (default thermodrift-demo)");
   app->add_option("--seed", args->seed, "simulator seed");
   app->add_option("--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
+  add_identify_option(*app, args->identify);
   app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(CLI::PositiveNumber);
   return {app, [args] { return run_demo(*args); }};
 }

@@ -28,7 +28,7 @@ struct FitArguments {
   double rate_span = 0;
   std::size_t decimate = 0;
   std::vector<std::string> features{"dT", "rate"};
-  std::string identify = "thermal-node";
+  FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
   std::string tune;
   std::string objective = "cv";
   std::uint64_t seed = 1;
@@ -47,7 +47,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   if (args.rate_span > 0) options.rate_span_seconds = args.rate_span;
   if (args.decimate > 0) options.decimation = args.decimate;
   options.terms = args.features;
-  if (args.identify == "greedy") options.selection.method = FeatureSelectionOptions::Method::greedy;
+  options.selection.method = args.identify;
   options.selection.proceed = [] { return !interrupt_requested(); };
   options.selection.threads =
       args.threads > 0 ? args.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -160,11 +160,7 @@ Command add_fit(CLI::App& parent) {
   app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
       ->check(CLI::PositiveNumber);
   app->add_option("--features", args->features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md")->delimiter(',');
-  app->add_option("--identify", args->identify,
-                  "with --features auto: thermal-node (default; one node's lags, a piecewise-linear map of its "
-                  "temperature and linear dynamic terms) or greedy (a forward search over single terms); "
-                  "docs/features.md")
-      ->check(CLI::IsMember({"greedy", "thermal-node"}));
+  add_identify_option(*app, args->identify);
   app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
       ->check(CLI::IsMember({"afsa", "grid", "random"}));
   app->add_option("--objective", args->objective,

@@ -22,6 +22,7 @@ namespace {
 
 struct ReportArguments {
   std::vector<std::string> features;  // besides the paper's pair; empty: the pair only
+  FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
   DataOptions data;
   std::string out;
   std::optional<double> holdout_fraction;
@@ -68,6 +69,7 @@ int run_report(const ReportArguments& args) {
   tuning.evaluations = args.evaluations;
   options.study.calibration.tuning = tuning;
   options.study.calibration.selection.threads = tuning.threads;  // axes searched at once
+  options.study.calibration.selection.method = args.identify;
   options.study.other_terms = args.features;
   if (args.split_time) {
     const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time) - log.time.begin();
@@ -83,6 +85,7 @@ int run_report(const ReportArguments& args) {
   options.title = "thermodrift report — " + log.source;
   options.command_line = fmt::format("thermodrift report --data {} --out {}", log.source, args.out);
   if (!args.features.empty()) options.command_line += fmt::format(" --features {}", fmt::join(args.features, ","));
+  if (args.identify == FeatureSelectionOptions::Method::greedy) options.command_line += " --identify greedy";
   options.earlier_steps.emplace_back(
       "read the log", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   options.progress = progress_printer("thermodrift report", start);
@@ -143,6 +146,7 @@ Command add_report(CLI::App& parent) {
       ->excludes(fraction);
   app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)");
   app->add_option("--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
+  add_identify_option(*app, args->identify);
   app->add_option("--threads", args->threads, "threads for the SVR fits")->check(CLI::PositiveNumber);
   app->add_option("--evaluations", args->evaluations, "AFSA budget of objective evaluations per axis (default 100)")
       ->check(CLI::PositiveNumber);
