@@ -98,10 +98,11 @@ std::vector<double> time_constant_grid();
 FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
                                  const FeatureSelectionOptions& options);
 
-// One thermal node per axis (docs/features.md): the node's lag τ chosen by blocked CV on a
-// grid limited to what the log can identify, a piecewise-linear map of its temperature,
-// its rate and the sensor's, then dynamic terms linear in the node's state (gradient
-// rate, direction memory, a second lag) while each pays.
+// One thermal node per axis (docs/features.md): the node's lag chosen by blocked CV on a
+// grid limited to what the log can identify (two lags in series or a lag with a lead when
+// they pay), a piecewise-linear map of its temperature, its rate and the sensor's, then
+// dynamic terms linear in the node's state (Shupe gradient rate, direction memory, play,
+// a second lag) while each pays; every constant refined by a pattern search and a simplex.
 FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std::size_t axis,
                                        const Pipeline& pipeline, const FeatureSelectionOptions& options);
 
