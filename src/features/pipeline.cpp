@@ -193,6 +193,7 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
   std::vector<double> flat;
   std::vector<double> target;
   FeatureTable table;
+  table.run_start = {0};
   std::size_t ready_count = 0;
   std::vector<double> channels(pipeline.channels().empty() ? 0 : log.temperature.size());
   for (std::size_t i = 0; i < log.rows(); ++i) {
@@ -235,6 +236,7 @@ void append_rows(FeatureTable& table, const FeatureTable& more) {
   table.temperature.insert(table.temperature.end(), more.temperature.begin(), more.temperature.end());
   table.rate.insert(table.rate.end(), more.rate.begin(), more.rate.end());
   table.row.insert(table.row.end(), more.row.begin(), more.row.end());
+  for (const std::size_t start : more.run_start) table.run_start.push_back(static_cast<std::size_t>(n) + start);
 }
 
 }  // namespace thermodrift

@@ -114,10 +114,11 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
 // The rows of `table` at least `settle_seconds` after the pipeline's (re)start.
 FeatureTable settled_rows(const FeatureTable& table, double settle_seconds) {
   std::vector<Eigen::Index> kept;
-  for (std::size_t i = 0; i < table.rows(); ++i) {
+  FeatureTable out;
+  for (std::size_t i = 0, run = 0; i < table.rows(); ++i) {
+    for (; run < table.run_start.size() && table.run_start[run] == i; ++run) out.run_start.push_back(kept.size());
     if (table.since_start[i] >= settle_seconds) kept.push_back(static_cast<Eigen::Index>(i));
   }
-  FeatureTable out;
   out.features = table.features(kept, Eigen::all);
   out.target = table.target(kept);
   for (const Eigen::Index i : kept) {
@@ -135,7 +136,8 @@ FeatureTable settled_rows(const FeatureTable& table, double settle_seconds) {
 // (too short a log says so in terms of the warm-up, not of folds).
 FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
                                  const CalibrationOptions& calibration) {
-  const FeatureSelectionOptions& options = calibration.selection;  // its own folds, not the tuning's
+  FeatureSelectionOptions options = calibration.selection;  // its own folds, not the tuning's
+  options.folds_by = calibration.folds_by;
   require_samples(feature_table(logs, pipeline, axis, true), pipeline, logs, 4 * static_cast<std::size_t>(options.folds));
   if (calibration.selection_progress) calibration.selection_progress(axis, "choosing feature terms");
   if (options.method == FeatureSelectionOptions::Method::greedy) return select_features(logs, axis, pipeline, options);
@@ -171,15 +173,26 @@ std::vector<FeatureSelection> select_features_per_axis(const std::vector<Chamber
   return selections;
 }
 
+namespace {
+
+// "blocked 5-fold" or "leave-one-run-out (2 runs)", from a record with folds and folds_by.
+std::string cv_name(const nlohmann::json& record) {
+  HeldOutBlocks blocks;
+  blocks.blocks.resize(record.value("folds", std::size_t{0}));
+  blocks.by = parse_folds_by(record.value("folds_by", std::string("time")));
+  return blocks.describe();
+}
+
+}  // namespace
+
 std::optional<ExpectedHeldOut> expected_held_out(const nlohmann::json& fit) {
   if (fit.contains("tuning") && fit["tuning"].value("objective", "") == "cv") {
     return ExpectedHeldOut{fit["tuning"]["objective_mse"].get<double>(),
-                           fmt::format("the tuned SVR's blocked {}-fold CV", fit["tuning"].value("folds", 0))};
+                           fmt::format("the tuned SVR's {} CV", cv_name(fit["tuning"]))};
   }
   if (fit.contains("feature_selection")) {
     return ExpectedHeldOut{fit["feature_selection"]["cv_mse"].get<double>(),
-                           fmt::format("the feature search's blocked {}-fold least-squares CV",
-                                       fit["feature_selection"].value("folds", 0))};
+                           fmt::format("the feature search's {} least-squares CV", cv_name(fit["feature_selection"]))};
   }
   return std::nullopt;
 }
@@ -244,7 +257,8 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       fitted.fit["tuning"] = {{"method", to_string(tuning.method)},
                               {"objective", to_string(tuned.objective)},
                               {"optimistic", tuned.optimistic},
-                              {"folds", tuning.folds},
+                              {"folds", tuning.blocks.empty() ? std::size_t(tuning.folds) : tuning.blocks.size()},
+                              {"folds_by", tuning.blocks.empty() ? "time" : "runs"},
                               {"objective_mse", tuned.objective_value * svr.scaling.target_scale * svr.scaling.target_scale},
                               {"objective_unit", "(deg/h)^2"},
                               {"fits", tuned.fits},
@@ -361,6 +375,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
         judge.tuning = options.tuning;
         judge.fixed = options.svr;
         if (options.tuning) judge.folds = options.tuning->folds;
+        judge.folds_by = options.folds_by;
         judge.min_gain = selection_options.min_gain;
         judge_by_svr(selection, logs, axis, axis_model.pipeline, judge);
       }
@@ -377,6 +392,11 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     axis_options.partially_linear = options.partially_linear ||
                                     (chooses_features(options) &&
                                      options.selection.method == FeatureSelectionOptions::Method::thermal_node);
+    if (axis_options.tuning && axis_options.tuning->objective == TuneObjective::cv) {
+      const HeldOutBlocks held_out = cv_blocks(training.features.rows(), training.run_start,
+                                               axis_options.tuning->folds, options.folds_by);
+      if (held_out.by == FoldsBy::runs) axis_options.tuning->blocks = held_out.blocks;
+    }
     FittedModel fitted =
         fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis);
     axis_model.model = std::move(fitted.model);

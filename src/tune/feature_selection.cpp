@@ -108,7 +108,8 @@ nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options)
   }
   return {{"method", options.method == FeatureSelectionOptions::Method::thermal_node ? "thermal_node" : "greedy"},
           {"scored_by", scored_by},
-          {"folds", options.folds},
+          {"folds", held_out.blocks.size()},
+          {"folds_by", to_string(held_out.by)},
           {"min_gain", options.min_gain},
           {"start_mse", start_mse},
           {"cv_mse", cv_mse},
@@ -140,7 +141,7 @@ class Search {
 
   double cv(const Terms& terms) {
     ++result_.candidates_scored;
-    return least_squares_cv(cache_.matrix(terms), cache_.target(), options_.folds);
+    return least_squares_cv(cache_.matrix(terms), cache_.target(), result_.held_out.blocks);
   }
   double penalized(const Scored& s) const { return s.cv / std::pow(keep_, static_cast<double>(s.terms.size())); }
 
@@ -232,6 +233,7 @@ FeatureSelection select_features(const std::vector<ChamberLog>& logs, std::size_
                                  options.folds));
   }
   FeatureSelection result;
+  result.held_out = cache.blocks(options.folds, options.folds_by);
   Search search(cache, options, result);
   using Scored = Search::Scored;
   Scored current{{}, search.cv({}), {}};
@@ -343,15 +345,19 @@ void judge_by_svr(FeatureSelection& selection, const std::vector<ChamberLog>& lo
     trial.terms.clear();
     for (const auto& name : terms) trial.terms.push_back(FeatureTerm::parse(name));
     const FeatureTable table = feature_table(logs, trial, axis, true);
+    const HeldOutBlocks held_out = cv_blocks(table.features.rows(), table.run_start,
+                                             tuning ? tuning->folds : options.folds, options.folds_by);
     const Standardization scaling = Standardization::of(table.features, table.target);
     const Eigen::MatrixXd x = scaling.features(table.features);
     const Eigen::VectorXd y = scaling.target(table.target);
     double scaled_mse = 0;
     if (tuning) {
-      scaled_mse = tune_svr(x, y, *tuning).objective_value;
+      SvrTuningOptions judged = *tuning;
+      judged.blocks = held_out.blocks;
+      scaled_mse = tune_svr(x, y, judged).objective_value;
     } else {
       SvrTuningOptions cv;
-      cv.folds = options.folds;
+      cv.blocks = held_out.blocks;
       cv.solver = options.fixed;
       const SvrObjective objective(x, y, cv);
       scaled_mse = objective(options.fixed.C, std::sqrt(0.5 / options.fixed.gamma), options.fixed.epsilon);

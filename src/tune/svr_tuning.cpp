@@ -57,6 +57,14 @@ const char* to_string(TuneMethod method) {
   return "?";
 }
 
+FoldsBy parse_folds_by(std::string_view text) {
+  if (text == "time") return FoldsBy::time;
+  if (text == "runs") return FoldsBy::runs;
+  throw UsageError(fmt::format("unknown folds '{}' (expected time or runs)", text));
+}
+
+const char* to_string(FoldsBy folds_by) { return folds_by == FoldsBy::runs ? "runs" : "time"; }
+
 namespace {
 
 bool fail(std::string* why, std::string reason) {
@@ -72,6 +80,13 @@ bool valid_range(double low, double high) {
 
 bool SvrTuningOptions::IsValid(std::string* why) const {
   if (folds < 2) return fail(why, fmt::format("folds must be at least 2 (got {})", folds));
+  for (std::size_t k = 0; k < blocks.size(); ++k) {
+    if (blocks[k].begin < (k ? blocks[k - 1].end : 0) || blocks[k].size() < 1) {
+      return fail(why, fmt::format("held-out block {} [{}, {}) is empty or overlaps the one before", k,
+                                   blocks[k].begin, blocks[k].end));
+    }
+  }
+  if (blocks.size() == 1) return fail(why, "one held-out block leaves nothing to compare: give two or more");
   if (!(holdout_fraction > 0 && holdout_fraction < 1)) {
     return fail(why, fmt::format("holdout_fraction must be in (0, 1) (got {:g})", holdout_fraction));
   }
@@ -117,6 +132,24 @@ std::vector<SampleRange> blocked_folds(Eigen::Index samples, int folds) {
     blocks.push_back({samples * k / folds, samples * (k + 1) / folds});
   }
   return blocks;
+}
+
+std::string HeldOutBlocks::describe() const {
+  return by == FoldsBy::runs ? fmt::format("leave-one-run-out ({} runs)", blocks.size())
+                             : fmt::format("blocked {}-fold", blocks.size());
+}
+
+HeldOutBlocks cv_blocks(Eigen::Index samples, const std::vector<std::size_t>& run_start, int folds, FoldsBy by) {
+  std::vector<SampleRange> runs;
+  if (by == FoldsBy::runs) {
+    for (std::size_t k = 0; k < run_start.size(); ++k) {
+      const auto begin = static_cast<Eigen::Index>(run_start[k]);
+      const auto end = k + 1 < run_start.size() ? static_cast<Eigen::Index>(run_start[k + 1]) : samples;
+      if (end > begin) runs.push_back({begin, end});
+    }
+  }
+  if (runs.size() >= 2) return {std::move(runs), FoldsBy::runs};
+  return {blocked_folds(samples, folds), FoldsBy::time};
 }
 
 SampleRange holdout_range(Eigen::Index samples, double fraction) {
@@ -205,6 +238,13 @@ SvrObjective::SvrObjective(const Eigen::MatrixXd& samples, const Eigen::VectorXd
   std::vector<SampleRange> held_out;  // empty range: the train objective
   switch (options.objective) {
     case TuneObjective::cv:
+      if (!options.blocks.empty()) {
+        if (options.blocks.back().end > n) {
+          throw UsageError(fmt::format("held-out blocks reach sample {} of {}", options.blocks.back().end, n));
+        }
+        held_out = options.blocks;
+        break;
+      }
       if (n < 2 * options.folds) {
         throw UsageError(fmt::format("blocked {}-fold CV needs at least {} samples (got {})", options.folds,
                                      2 * options.folds, n));

@@ -6,7 +6,7 @@
 
 namespace thermodrift {
 
-// Pooled MSE of least squares (with an intercept) over blocked folds: each block is
+// Pooled MSE of least squares (with an intercept) over held-out blocks: each block is
 // predicted by the fit on the rest. Columns are scaled to a largest magnitude of 1 so that
 // powers of large values keep the normal equations well scaled. One Gram matrix serves every
 // fold (the fold's own rows subtracted), so a set costs two passes over the samples, not
@@ -14,7 +14,7 @@ namespace thermodrift {
 // settles nearly collinear columns (a hinge whose knot no sample passes is the node's
 // level minus a constant); it moves the fits of well-determined columns by far less than
 // the noise does.
-double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int folds) {
+double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) {
   const Eigen::Index n = y.size();
   Eigen::MatrixXd design(n, x.cols() + 1);
   design.col(0).setOnes();
@@ -27,7 +27,8 @@ double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int 
   gram = gram.selfadjointView<Eigen::Lower>();
   const Eigen::VectorXd moment = design.transpose() * y;
   double squared_error = 0;
-  for (const SampleRange& block : blocked_folds(n, folds)) {
+  double held_out = 0;
+  for (const SampleRange& block : blocks) {
     const auto rows = design.middleRows(block.begin, block.size());
     const auto target = y.segment(block.begin, block.size());
     Eigen::MatrixXd train = gram - rows.transpose() * rows;
@@ -35,8 +36,9 @@ double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int 
     train.diagonal() += 1e-9 * train.diagonal().cwiseAbs() + Eigen::VectorXd::Constant(train.rows(), 1e-300);
     const Eigen::VectorXd beta = train.ldlt().solve(rhs);
     squared_error += (target - rows * beta).squaredNorm();
+    held_out += static_cast<double>(block.size());
   }
-  return squared_error / static_cast<double>(n);
+  return squared_error / held_out;
 }
 
 }  // namespace thermodrift

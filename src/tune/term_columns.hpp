@@ -12,6 +12,7 @@
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/tune/calibration.hpp"
+#include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
 
@@ -25,9 +26,14 @@ class ColumnCache {
     pipeline_.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
     const FeatureTable table = feature_table(logs, pipeline_, axis, true);
     target_ = table.target;
+    run_start_ = table.run_start;
   }
 
   const Eigen::VectorXd& target() const { return target_; }
+  // The held-out blocks of the searches' cross-validation (cv_blocks).
+  HeldOutBlocks blocks(int folds, FoldsBy by) const {
+    return cv_blocks(target_.size(), run_start_, folds, by);
+  }
 
   void ensure(const std::vector<std::string>& names) {
     pipeline_.terms.clear();
@@ -60,11 +66,12 @@ class ColumnCache {
   std::size_t axis_;
   Pipeline pipeline_;
   Eigen::VectorXd target_;
+  std::vector<std::size_t> run_start_;
   std::map<std::string, Eigen::VectorXd> columns_;
 };
 
-// Pooled MSE of least squares (with an intercept) over `folds` contiguous blocks in time:
-// each block is predicted by the fit on the rest.
-double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, int folds);
+// Pooled MSE of least squares (with an intercept) over held-out `blocks` (contiguous
+// blocks in time, or runs): each block is predicted by the fit on the rest.
+double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks);
 
 }  // namespace thermodrift

@@ -159,12 +159,13 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   }
   FeatureSelection result;
   result.scored_by = "least_squares";
+  result.held_out = cache.blocks(options.folds, options.folds_by);
   auto score = [&](const NodeModel& model) {
     if (options.proceed && !options.proceed()) throw Interrupted("feature identification stopped");
     ++result.candidates_scored;
-    return least_squares_cv(cache.matrix(model.terms()), y, options.folds);
+    return least_squares_cv(cache.matrix(model.terms()), y, result.held_out.blocks);
   };
-  result.start_mse = least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, options.folds);
+  result.start_mse = least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, result.held_out.blocks);
 
   // A lag is identifiable when the log holds several of it: at most a quarter of its span.
   const double longest = std::min(options.max_time_constant, training_span_seconds(logs) / 4.0);

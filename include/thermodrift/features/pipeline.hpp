@@ -120,6 +120,9 @@ struct FeatureTable {
   std::vector<double> temperature;  // smoothed, °C
   std::vector<double> rate;         // smoothed dT/dt, °C/min
   std::vector<std::size_t> row;   // index of the log row
+  // First row of each run: one per log appended (a table of one log holds {0}). Runs are
+  // separate chamber runs: cross-validation can hold out whole runs.
+  std::vector<std::size_t> run_start;
   std::size_t rows() const { return row.size(); }
 };
 
@@ -128,7 +131,7 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
                                  std::size_t gyro_axis, std::size_t temperature_channel,
                                  bool decimate);
 
-// Appends the rows of `more` to `table` (several logs fitted together).
+// Appends the rows of `more` to `table` (several logs fitted together), with its runs.
 void append_rows(FeatureTable& table, const FeatureTable& more);
 
 }  // namespace thermodrift

@@ -33,6 +33,11 @@ struct CalibrationOptions {
   // fitting several models shares one search); empty: calibrate searches.
   std::vector<FeatureSelection> selections;
   FeatureSelectionOptions selection;       // how terms {"auto"} are identified
+  // Cross-validation of the feature search and of the SVR tuning: time (default), blocked
+  // folds in time over the logs in order; runs, with two or more logs (separate runs), one
+  // fold per run (leave-one-run-out). Overrides selection.folds_by. Two runs held out in
+  // turn scored worse choices than ten blocks on the development laws (docs/tuning.md).
+  FoldsBy folds_by = FoldsBy::time;
   // Set by calibrate for terms the thermal node identified, which are built for a linear
   // fit: svr fits least squares on the terms and the SVR on its residual
   // (SvrModel::linear_part); stepwise chooses among the terms themselves, without the
@@ -46,7 +51,7 @@ struct CalibrationOptions {
 // True when options.terms is {"auto"}: calibrate chooses terms per axis (tune/feature_selection.hpp).
 bool chooses_features(const CalibrationOptions& options);
 
-// What an axis' fit expects held out: the blocked-CV MSE (°/h)² its choices were scored by
+// What an axis' fit expects held out: the CV MSE (°/h)² its choices were scored by
 // (the tuned SVR's CV, else the feature search's least-squares CV) and where it comes from.
 // A selection score on the training data, so an estimate, not a held-out measurement.
 struct ExpectedHeldOut {

@@ -43,6 +43,8 @@ struct FeatureSelectionOptions {
   // block is a whole regime of a chamber cycle (the hot soak, the cold ramp), and terms
   // that happen to extrapolate into it win over the physical ones (docs/features.md).
   int folds = 10;
+  // runs, with two or more training logs (separate runs): one fold per run instead.
+  FoldsBy folds_by = FoldsBy::time;
   // greedy: a set of k terms is scored CV(S) / (1 - min_gain)^k: a term must cut the CV MSE by more
   // than this fraction to be taken. Smoothed gyro noise is correlated over minutes, so a
   // chamber cycle holds few independent stretches of it and small gains are mostly noise
@@ -60,6 +62,7 @@ struct SvrJudgeOptions {
   std::optional<SvrTuningOptions> tuning;
   SvrOptions fixed;
   int folds = 5;
+  FoldsBy folds_by = FoldsBy::time;  // as FeatureSelectionOptions::folds_by
   long evaluations = 20;     // AFSA budget per judged set
   std::size_t sets = 3;      // the last sets the search settled on
   double min_gain = 0.10;    // the same penalty per term as the search
@@ -79,6 +82,7 @@ struct FeatureSelection {
   double cv_mse = 0;     // CV MSE of the chosen set, as scored
   std::vector<SelectionStep> path;
   std::size_t candidates_scored = 0;
+  HeldOutBlocks held_out;  // the least-squares CV's blocks (their count and kind go to the JSON)
 
   nlohmann::json to_json(const FeatureSelectionOptions& options) const;
 };

@@ -39,10 +39,28 @@ TuneMethod parse_tune_method(std::string_view text);
 const char* to_string(TuneObjective objective);
 const char* to_string(TuneMethod method);
 
+// Rows [begin, end) of the time-ordered samples.
+struct SampleRange {
+  Eigen::Index begin = 0;
+  Eigen::Index end = 0;
+  Eigen::Index size() const { return end - begin; }
+};
+
+// How cross-validation cuts the training samples into held-out blocks. time: k contiguous
+// blocks in time (blocked_folds). runs: with two or more runs (separate chamber logs), one
+// block per run, each predicted by the fit on the others (leave-one-run-out): the test of
+// a model on a run it has not seen; with one run, as time.
+enum class FoldsBy { time, runs };
+FoldsBy parse_folds_by(std::string_view text);  // "time", "runs"; UsageError otherwise
+const char* to_string(FoldsBy folds_by);
+
 struct SvrTuningOptions {
   TuneMethod method = TuneMethod::afsa;
   TuneObjective objective = TuneObjective::cv;
   int folds = 5;                    // cv: contiguous blocks in time (at least 2)
+  // cv: these held-out blocks instead of `folds` blocked folds (one per run for
+  // leave-one-run-out, from cv_blocks); sorted, disjoint, each non-empty.
+  std::vector<SampleRange> blocks;
   double holdout_fraction = 0.3;    // holdout: the last part of the time-ordered samples, in (0, 1)
 
   // The box, in standardized units, every dimension log-scaled. The default is the issue's
@@ -97,17 +115,20 @@ struct SvrTuningResult {
   std::string BriefReport() const;  // one line, "optimistic" spelled out for train
 };
 
-// Rows [begin, end) of the time-ordered samples.
-struct SampleRange {
-  Eigen::Index begin = 0;
-  Eigen::Index end = 0;
-  Eigen::Index size() const { return end - begin; }
-};
-
 // The k contiguous blocks of blocked k-fold CV over n samples: block i is
 // [⌊i n / k⌋, ⌊(i+1) n / k⌋), so they cover 0..n-1 once, in order, sizes differing by ≤ 1.
 // UsageError unless 2 ≤ k ≤ n.
 std::vector<SampleRange> blocked_folds(Eigen::Index samples, int folds);
+// The held-out blocks of cross-validation over `samples` rows whose runs start at
+// `run_start` (FeatureTable::run_start): one block per non-empty run when `by` is runs and
+// there are two or more of them (`by` stays runs), else blocked_folds(samples, folds) (`by`
+// is time).
+struct HeldOutBlocks {
+  std::vector<SampleRange> blocks;
+  FoldsBy by = FoldsBy::time;
+  std::string describe() const;  // "blocked 10-fold" or "leave-one-run-out (3 runs)"
+};
+HeldOutBlocks cv_blocks(Eigen::Index samples, const std::vector<std::size_t>& run_start, int folds, FoldsBy by);
 // The held-out part of a holdout split: the last round(f n) samples (at least one, and at
 // least one left to train on). UsageError unless n ≥ 2 and 0 < f < 1.
 SampleRange holdout_range(Eigen::Index samples, double fraction);

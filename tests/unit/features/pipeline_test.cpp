@@ -218,6 +218,7 @@ TEST(BuildFeatureTable, AppendRowsConcatenates) {
   EXPECT_EQ(table.features.rows(), 40);
   EXPECT_EQ(table.target(20), table.target(0));
   EXPECT_EQ(table.time[20], 30.0);
+  EXPECT_EQ(table.run_start, (std::vector<std::size_t>{0, 20}));  // each appended log is a run
 }
 
 TEST(DefaultDecimation, AboutTenSamplesPerWindow) {

@@ -66,6 +66,54 @@ TEST(BlockedFolds, RejectsTooFewSamplesOrFolds) {
   EXPECT_THROW(blocked_folds(3, 5), UsageError);
 }
 
+TEST(CvBlocks, OneBlockPerRunWhenThereAreTwoOrMore) {
+  // Runs start at rows 0, 30, 30 (an empty run: left out) and 70 of 100.
+  const HeldOutBlocks runs = cv_blocks(100, {0, 30, 30, 70}, 5, FoldsBy::runs);
+  EXPECT_EQ(runs.by, FoldsBy::runs);
+  ASSERT_EQ(runs.blocks.size(), 3u);
+  EXPECT_EQ(runs.blocks[0].begin, 0);
+  EXPECT_EQ(runs.blocks[0].end, 30);
+  EXPECT_EQ(runs.blocks[1].begin, 30);
+  EXPECT_EQ(runs.blocks[1].end, 70);
+  EXPECT_EQ(runs.blocks[2].begin, 70);
+  EXPECT_EQ(runs.blocks[2].end, 100);
+  EXPECT_EQ(runs.describe(), "leave-one-run-out (3 runs)");
+  // One run, or folds in time asked for: blocked folds.
+  for (const HeldOutBlocks& time : {cv_blocks(100, {0}, 5, FoldsBy::runs), cv_blocks(100, {0, 30, 30, 70}, 5, FoldsBy::time)}) {
+    EXPECT_EQ(time.by, FoldsBy::time);
+    ASSERT_EQ(time.blocks.size(), 5u);
+    EXPECT_EQ(time.blocks[1].begin, 20);
+    EXPECT_EQ(time.describe(), "blocked 5-fold");
+  }
+  EXPECT_EQ(parse_folds_by(to_string(FoldsBy::runs)), FoldsBy::runs);
+  EXPECT_EQ(parse_folds_by(to_string(FoldsBy::time)), FoldsBy::time);
+  EXPECT_THROW(parse_folds_by("shuffled"), UsageError);
+}
+
+TEST(CvBlocks, ExplicitBlocksScoreAsTheSameBlockedFolds) {
+  // Two explicit halves are blocked 2-fold CV: the same objective, to the bit.
+  const Problem problem = sine_problem(60, 0.1, 3);
+  SvrTuningOptions folds;
+  folds.folds = 2;
+  SvrTuningOptions halves;
+  halves.blocks = {{0, 30}, {30, 60}};
+  const SvrObjective by_folds(problem.samples, problem.targets, folds);
+  const SvrObjective by_blocks(problem.samples, problem.targets, halves);
+  EXPECT_EQ(by_folds(10, 0.5, 0.01), by_blocks(10, 0.5, 0.01));
+  // Uneven runs are not halves: another objective.
+  halves.blocks = {{0, 10}, {10, 60}};
+  EXPECT_NE(SvrObjective(problem.samples, problem.targets, halves)(10, 0.5, 0.01), by_folds(10, 0.5, 0.01));
+  // Blocks must be two or more, non-empty, in order and inside the samples.
+  for (const std::vector<SampleRange>& bad : std::vector<std::vector<SampleRange>>{
+           {{0, 60}}, {{0, 30}, {30, 30}}, {{0, 40}, {30, 60}}}) {
+    SvrTuningOptions options;
+    options.blocks = bad;
+    EXPECT_FALSE(options.IsValid(nullptr));
+  }
+  halves.blocks = {{0, 30}, {30, 61}};
+  EXPECT_THROW(tune_svr(problem.samples, problem.targets, halves), UsageError);
+}
+
 TEST(HoldoutRange, TakesTheLastPart) {
   const SampleRange held = holdout_range(100, 0.3);
   EXPECT_EQ(held.begin, 70);
