@@ -66,6 +66,23 @@ int run_evaluate(const EvaluateArguments& args) {
     axes.push_back(entry);
   }
   result["axes"] = axes;
+  if (logs.size() >= 2) {  // several runs: each on its own, then all together (above)
+    nlohmann::json runs = nlohmann::json::array();
+    for (const auto& log : logs) {
+      const auto per_run = evaluate_axes(model, {log}, args.settle);
+      nlohmann::json run_axes = nlohmann::json::array();
+      for (std::size_t a = 0; a < per_run.size(); ++a) {
+        nlohmann::json entry = per_run[a].metrics.to_json();
+        entry["name"] = model.axes[a].name;
+        if (model.axes[a].pipeline.smooth_seconds > 0) {
+          add_noise_floor(entry, estimate_noise_floor({log}, a, model.axes[a].pipeline.smooth_seconds));
+        }
+        run_axes.push_back(entry);
+      }
+      runs.push_back({{"file", log.source}, {"axes", run_axes}});
+    }
+    result["runs"] = runs;
+  }
   print_axes(result, args.json, fmt::format("{} on {}", args.model_file, fmt::join(args.data.files, ", ")));
   return 0;
 }

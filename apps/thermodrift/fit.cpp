@@ -35,6 +35,7 @@ struct FitArguments {
   int threads = 0;
   long evaluations = 49;
   int folds = 5;
+  std::string folds_by = "time";
   bool tune_epsilon = false;
   std::string out;
   bool json = false;
@@ -48,6 +49,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   if (args.decimate > 0) options.decimation = args.decimate;
   options.terms = args.features;
   options.selection.method = args.identify;
+  options.folds_by = parse_folds_by(args.folds_by);
   options.selection.proceed = [] { return !interrupt_requested(); };
   options.selection.threads =
       args.threads > 0 ? args.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -168,6 +170,11 @@ Command add_fit(CLI::App& parent) {
       ->check(CLI::IsMember({"cv", "holdout", "train"}));
   app->add_option("--evaluations", args->evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(CLI::PositiveNumber);
   app->add_option("--folds", args->folds, "folds of the blocked cross-validation (default 5)")->check(CLI::Range(2, 100));
+  app->add_option("--folds-by", args->folds_by,
+                  "cross-validation folds of tuning and --features auto: time (default; --folds blocks in time, "
+                  "over several --data files in order) or runs (with two or more --data files, one fold per "
+                  "file: leave-one-run-out)")
+      ->check(CLI::IsMember({"runs", "time"}));
   app->add_flag("--tune-epsilon", args->tune_epsilon, "tune ε as well");
   app->add_option("--seed", args->seed, "seed of the tuner's random choices");
   app->add_option("--threads", args->threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")

@@ -40,6 +40,18 @@ void print_axes(const nlohmann::json& result, bool as_json, const std::string& t
                axis.at("mse_after").get<double>(), axis.at("residual_std").get<double>(),
                axis.at("residual_peak_to_peak").get<double>());
   }
+  if (result.contains("runs")) {
+    fmt::print("per run:\n");
+    for (const auto& run : result["runs"]) {
+      for (const auto& axis : run.at("axes")) {
+        std::string ratio;
+        if (axis.contains("mse_after_x_floor")) ratio = fmt::format(" ({:.3g} × its floor estimate)", axis["mse_after_x_floor"].get<double>());
+        fmt::print("  {} {}: {} samples, MSE before {:.6g}, after {:.6g} (°/h)²{}\n", run.at("file").get<std::string>(),
+                   axis.at("name").get<std::string>(), axis.at("samples").get<std::size_t>(),
+                   axis.at("mse_before").get<double>(), axis.at("mse_after").get<double>(), ratio);
+      }
+    }
+  }
   for (const auto& axis : result.at("axes")) {
     if (!axis.contains("terms")) continue;
     std::string terms;
