@@ -3,13 +3,16 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "commands.hpp"
 #include "data_options.hpp"
 #include "interrupt.hpp"
 #include "thermodrift/compensate/compensator.hpp"
+#include "thermodrift/compensate/readiness.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/io/csv_reader.hpp"
@@ -32,8 +35,38 @@ constexpr int kFlagOutsideEnvelope = 2;
 // What compensate tells about one axis at the end.
 struct AxisTrust {
   EnvelopeTally outside;      // ready rows against the training envelope
-  std::size_t not_ready = 0;  // rows in a warm-up
+  ReadinessTally readiness;   // rows in a warm-up, and why
 };
+
+// One warning per axis with rows outside the training envelope; one line when no row
+// was ready, saying why (a warm-up at the start is normal: not said otherwise).
+void report_trust(const DriftModel& model, const std::vector<AxisTrust>& trust, std::size_t rows) {
+  for (std::size_t a = 0; a < trust.size(); ++a) {
+    const AxisTrust& t = trust[a];
+    if (t.outside.outside == 0) continue;
+    std::string message = fmt::format("compensate: {}: {} of {} rows outside the training envelope ({})",
+                                      model.axes[a].name, t.outside.outside, rows,
+                                      t.outside.describe(*model.axes[a].envelope));
+    if (t.readiness.not_ready() > 0) message += fmt::format("; {} rows not ready (warm-up)", t.readiness.not_ready());
+    warn(message);
+  }
+  std::vector<std::size_t> never_ready;
+  for (std::size_t a = 0; a < trust.size(); ++a) {
+    if (rows > 0 && trust[a].readiness.ready() == 0) never_ready.push_back(a);
+  }
+  if (never_ready.empty()) return;
+  const std::size_t first = never_ready.front();
+  std::string message = fmt::format("compensate: {}: never ready: all {} rows were within the {:g} s warm-up of a start "
+                                    "or a gap; {}",
+                                    model.axes[first].name, rows, model.axes[first].pipeline.warm_up_seconds(),
+                                    trust[first].readiness.never_ready_reason());
+  if (never_ready.size() > 1) {
+    std::vector<std::string> others;
+    for (auto it = never_ready.begin() + 1; it != never_ready.end(); ++it) others.push_back(model.axes[*it].name);
+    message += fmt::format(" (likewise {})", fmt::join(others, ", "));
+  }
+  warn(message);
+}
 
 int run_compensate(const CompensateArguments& args) {
   if (args.data.files.size() != 1) throw UsageError("compensate takes one --data file");
@@ -41,7 +74,8 @@ int run_compensate(const CompensateArguments& args) {
   DriftModel model = load_drift_model(args.model_file);
   const LogSpec spec = args.data.spec_for(model);
   CsvReader reader(path, spec.csv);
-  const LogColumns columns = resolve_columns(spec, reader);
+  LogSampleReader samples(reader, spec);
+  const LogColumns& columns = samples.columns();
   const std::size_t inputs = model.temperature_inputs();
   const bool shared = columns.temperature.size() == 1 && model.extra_temperature_columns.empty();
   if (!shared && columns.temperature.size() != inputs) {
@@ -65,29 +99,25 @@ int run_compensate(const CompensateArguments& args) {
   Compensator compensator(std::move(model));
   const std::size_t axes = compensator.axes();
   std::vector<double> temperatures(inputs);
-  std::vector<AxisTrust> trust(axes);
+  std::vector<AxisTrust> trust;
+  for (const auto& axis : compensator.model().axes) trust.push_back({{}, ReadinessTally(axis.pipeline)});
+  std::size_t not_ready_rows = 0;
   LogSample sample;
-  double previous_time = std::nan("");
-  std::size_t row_index = 0;
   std::string line;
-  while (auto row = reader.next()) {
-    if ((row_index & 0xFFF) == 0) throw_if_interrupted();
-    if (!read_sample(reader, *row, columns, spec, row_index, previous_time, sample)) continue;
-    previous_time = sample.time;
-    ++row_index;
+  // The echoed row is the file's text: times relative to the first row never reach it.
+  while (auto row = samples.next(sample)) {
+    if ((samples.rows() & 0xFFF) == 1) throw_if_interrupted();
     for (std::size_t c = 0; c < inputs; ++c) temperatures[c] = sample.temperature[shared ? 0 : c];
     const auto& result = compensator.push(sample.time, sample.gyro, temperatures);
+    if (!result.ready) ++not_ready_rows;
     line.assign(row->text);
     for (std::size_t a = 0; a < axes; ++a) {
       fmt::format_to(std::back_inserter(line), "{}{:.9g}", delimiter, result.compensated[a]);
     }
     for (std::size_t a = 0; a < axes; ++a) {
       const auto& status = result.axes[a];
-      if (status.ready) {
-        trust[a].outside.add(status.outside_envelope);
-      } else {
-        ++trust[a].not_ready;
-      }
+      if (status.ready) trust[a].outside.add(status.outside_envelope);
+      trust[a].readiness.add(sample.time, status.since_start, status.ready);
       if (args.flags) {
         const int flags = (status.ready ? 0 : kFlagNotReady) | (status.outside_envelope.any() ? kFlagOutsideEnvelope : 0);
         fmt::format_to(std::back_inserter(line), "{}{}", delimiter, flags);
@@ -99,27 +129,10 @@ int run_compensate(const CompensateArguments& args) {
   reader.finish();
   for (const auto& warning : reader.warnings()) warn(warning);
   out.commit();
-  for (std::size_t a = 0; a < axes; ++a) {
-    const auto& axis = compensator.model().axes[a];
-    const AxisTrust& t = trust[a];
-    // A warm-up at the start is normal: say so only beside an excursion, or when the
-    // compensator never became ready at all.
-    const bool never_ready = row_index > 0 && t.not_ready == row_index;
-    if (t.outside.outside == 0 && !never_ready) continue;
-    std::string message = fmt::format("compensate: {}: ", axis.name);
-    if (t.outside.outside > 0) {
-      message += fmt::format("{} of {} rows outside the training envelope ({}); ", t.outside.outside, row_index,
-                             t.outside.describe(*axis.envelope));
-    }
-    if (never_ready) {
-      message += fmt::format("never ready: all {} rows were within the {:g} s warm-up of a start or a gap; ", row_index,
-                             axis.pipeline.warm_up_seconds());
-    } else if (t.not_ready > 0) {
-      message += fmt::format("{} rows not ready (warm-up); ", t.not_ready);
-    }
-    message.resize(message.size() - 2);
-    warn(message);
-  }
+  const std::size_t rows = samples.rows();
+  report_trust(compensator.model(), trust, rows);
+  std::fprintf(stderr, "thermodrift: %s: %zu of %zu rows not ready (warm-up / gaps)\n", path.c_str(), not_ready_rows,
+               rows);
   return 0;
 }
 

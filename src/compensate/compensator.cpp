@@ -33,6 +33,7 @@ const Compensator::Output& Compensator::push(double time, std::span<const double
     compensated_[a] = gyro[a] - drift_[a];
     const auto& envelope = model_.axes[a].envelope;
     status_[a].ready = sample.ready;
+    status_[a].since_start = sample.since_start;
     status_[a].outside_envelope = sample.ready && envelope
                                       ? envelope->check(sample.smoothed_temperature, sample.smoothed_rate)
                                       : Excursion{};

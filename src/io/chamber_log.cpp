@@ -39,6 +39,45 @@ double degrees_per_hour(GyroUnit unit) {
 
 namespace {
 
+double value_of(const std::vector<double>& values, std::size_t column, double fallback) {
+  if (values.empty()) return fallback;
+  return values.size() == 1 ? values.front() : values.at(column);
+}
+
+void check_values(const std::vector<double>& values, std::size_t columns, const char* option, const char* kind,
+                  bool is_scale) {
+  if (columns > 0 && values.size() > 1 && values.size() != columns) {
+    throw UsageError(fmt::format("{} has {} values for {} {} column{}: give one for all or one per column", option,
+                                 values.size(), columns, kind, columns == 1 ? "" : "s"));
+  }
+  for (const double value : values) {
+    if (!std::isfinite(value) || (is_scale && value == 0)) {
+      throw UsageError(fmt::format("{} must be a finite{} number, not {}", option, is_scale ? ", non-zero" : "", value));
+    }
+  }
+}
+
+}  // namespace
+
+bool LogScaling::is_default() const {
+  auto all = [](const std::vector<double>& values, double value) {
+    return std::all_of(values.begin(), values.end(), [&](double v) { return v == value; });
+  };
+  return all(temperature_scale, 1) && all(temperature_offset, 0) && all(gyro_scale, 1);
+}
+
+double LogScaling::temperature_scale_of(std::size_t column) const { return value_of(temperature_scale, column, 1); }
+double LogScaling::temperature_offset_of(std::size_t column) const { return value_of(temperature_offset, column, 0); }
+double LogScaling::gyro_scale_of(std::size_t column) const { return value_of(gyro_scale, column, 1); }
+
+void LogScaling::check(std::size_t gyro_columns, std::size_t temperature_columns) const {
+  check_values(temperature_scale, temperature_columns, "--temp-scale", "temperature", true);
+  check_values(temperature_offset, temperature_columns, "--temp-offset", "temperature", false);
+  check_values(gyro_scale, gyro_columns, "--gyro-scale", "gyro", true);
+}
+
+namespace {
+
 std::optional<std::size_t> as_index(std::string_view name) {
   std::size_t index = 0;
   const auto* end = name.data() + name.size();
@@ -130,23 +169,12 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
       columns.temperature.push_back(find_column(name, reader, "temperature"));
     }
   }
+  spec.scaling.check(columns.gyro.size(), columns.temperature.size());
   for (auto index : columns.gyro) columns.gyro_names.push_back(column_label(reader, index));
   for (auto index : columns.temperature) {
     columns.temperature_names.push_back(column_label(reader, index));
   }
   return columns;
-}
-
-void check_time_order(double previous, double current, const std::string& file, std::size_t line,
-                      std::size_t column) {
-  if (std::isnan(previous)) return;
-  if (current == previous) {
-    throw DataError(file, line, column, fmt::format("time {} repeats the previous row's", current));
-  }
-  if (current < previous) {
-    throw DataError(file, line, column,
-                    fmt::format("time goes backwards ({} after {})", current, previous));
-  }
 }
 
 ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end) {
@@ -159,6 +187,7 @@ ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end)
   ChamberLog part;
   part.source = log.source;
   part.time = cut(log.time);
+  part.time_origin = log.time_origin;
   part.gyro_names = log.gyro_names;
   part.temperature_names = log.temperature_names;
   for (const auto& g : log.gyro) part.gyro.push_back(cut(g));
@@ -168,9 +197,24 @@ ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end)
   return part;
 }
 
-bool read_sample(CsvReader& reader, const CsvRow& row, const LogColumns& columns, const LogSpec& spec,
-                 std::size_t row_index, double previous_time, LogSample& sample) {
-  const std::string& path = reader.path();
+LogSampleReader::LogSampleReader(CsvReader& reader, const LogSpec& spec)
+    : reader_(reader), spec_(spec), columns_(resolve_columns(spec, reader)) {
+  const double to_dph = degrees_per_hour(spec.gyro_unit);
+  for (std::size_t a = 0; a < columns_.gyro.size(); ++a) gyro_factor_.push_back(to_dph * spec.scaling.gyro_scale_of(a));
+}
+
+std::optional<CsvRow> LogSampleReader::next(LogSample& sample) {
+  while (auto row = reader_.next()) {
+    if (read(*row, sample)) {
+      ++rows_;
+      return row;
+    }
+  }
+  return std::nullopt;
+}
+
+bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
+  const std::string& path = reader_.path();
   // Read every needed cell before judging the row, so one garbled cell drops the row.
   auto cell = [&](std::size_t index, double& value) {
     const auto status = parse_number(row.cell(index), value);
@@ -178,27 +222,63 @@ bool read_sample(CsvReader& reader, const CsvRow& row, const LogColumns& columns
     if (status == CellStatus::not_finite || status == CellStatus::out_of_range) {
       parse_cell(row.cell(index), path, row.line, index + 1);  // throws the one-line error
     }
-    reader.drop_garbled(row, index + 1,
-                        row.cell(index).empty() ? std::string("empty cell, expected a number")
-                                                : fmt::format("'{}' is not a number", row.cell(index)));
+    reader_.drop_garbled(row, index + 1,
+                         row.cell(index).empty() ? std::string("empty cell, expected a number")
+                                                 : fmt::format("'{}' is not a number", row.cell(index)));
     return false;
   };
-  if (columns.time) {
-    if (!cell(*columns.time, sample.time)) return false;
-  } else {
-    sample.time = static_cast<double>(row_index) / *spec.rate_hz;
+  TimeStamp stamp;
+  if (columns_.time && !read_time(row, stamp)) return false;
+  sample.gyro.resize(columns_.gyro.size());
+  sample.temperature.resize(columns_.temperature.size());
+  for (std::size_t a = 0; a < columns_.gyro.size(); ++a) {
+    if (!cell(columns_.gyro[a], sample.gyro[a])) return false;
+    sample.gyro[a] *= gyro_factor_[a];
   }
-  const double to_dph = degrees_per_hour(spec.gyro_unit);
-  sample.gyro.resize(columns.gyro.size());
-  sample.temperature.resize(columns.temperature.size());
-  for (std::size_t a = 0; a < columns.gyro.size(); ++a) {
-    if (!cell(columns.gyro[a], sample.gyro[a])) return false;
-    sample.gyro[a] *= to_dph;
+  for (std::size_t c = 0; c < columns_.temperature.size(); ++c) {
+    if (!cell(columns_.temperature[c], sample.temperature[c])) return false;
+    sample.temperature[c] = spec_.scaling.temperature_scale_of(c) * sample.temperature[c] +
+                            spec_.scaling.temperature_offset_of(c);
   }
-  for (std::size_t c = 0; c < columns.temperature.size(); ++c) {
-    if (!cell(columns.temperature[c], sample.temperature[c])) return false;
+  if (!columns_.time) {
+    sample.time = static_cast<double>(rows_) / *spec_.rate_hz;
+    return true;
   }
-  if (columns.time) check_time_order(previous_time, sample.time, path, row.line, *columns.time + 1);
+  // Kept: the first kept row's stamp is the origin the others count from.
+  const std::string_view text = row.cell(*columns_.time);
+  if (!origin_) origin_ = TimeOrigin{std::string(text), stamp.iso ? TimeUnit::s : spec_.time_unit, stamp};
+  previous_ = stamp;
+  previous_text_.assign(text);
+  sample.time = stamp.seconds_since(origin_->stamp);
+  return true;
+}
+
+// Reads the time cell exactly and checks it against the previous kept row's.
+bool LogSampleReader::read_time(const CsvRow& row, TimeStamp& stamp) {
+  const std::string& path = reader_.path();
+  const std::size_t column = *columns_.time + 1;
+  const std::string_view text = row.cell(*columns_.time);
+  std::string problem;
+  if (!parse_time_stamp(text, spec_.time_unit, stamp, &problem)) {
+    double ignored = 0;
+    const auto status = parse_number(text, ignored);
+    if (status == CellStatus::not_finite) parse_cell(text, path, row.line, column);  // throws the one-line error
+    // A number the time arithmetic cannot hold exactly is no serial-link glitch.
+    if (status == CellStatus::ok || status == CellStatus::out_of_range) throw DataError(path, row.line, column, problem);
+    reader_.drop_garbled(row, column, problem);
+    return false;
+  }
+  if (!origin_) return true;
+  if (stamp.iso != origin_->stamp.iso) {
+    reader_.drop_garbled(row, column,
+                         fmt::format("'{}': expected {} like the first row's ('{}')", text,
+                                     origin_->stamp.iso ? "an ISO 8601 time stamp" : "a number", origin_->text));
+    return false;
+  }
+  if (stamp == previous_) throw DataError(path, row.line, column, fmt::format("time {} repeats the previous row's", text));
+  if (stamp < previous_) {
+    throw DataError(path, row.line, column, fmt::format("time goes backwards ({} after {})", text, previous_text_));
+  }
   return true;
 }
 
@@ -208,27 +288,25 @@ ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec) {
 }
 
 ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec) {
-  const std::string& path = reader.path();
-  const LogColumns columns = resolve_columns(spec, reader);
+  LogSampleReader samples(reader, spec);
+  const LogColumns& columns = samples.columns();
 
   ChamberLog log;
-  log.source = path;
+  log.source = reader.path();
   log.gyro_names = columns.gyro_names;
   log.temperature_names = columns.temperature_names;
   log.gyro.resize(columns.gyro.size());
   log.temperature.resize(columns.temperature.size());
 
   LogSample sample;
-  double previous_time = std::nan("");
-  while (auto row = reader.next()) {
-    if (!read_sample(reader, *row, columns, spec, log.time.size(), previous_time, sample)) continue;
-    previous_time = sample.time;
+  while (auto row = samples.next(sample)) {
     log.time.push_back(sample.time);
     log.line.push_back(row->line);
     for (std::size_t a = 0; a < sample.gyro.size(); ++a) log.gyro[a].push_back(sample.gyro[a]);
     for (std::size_t c = 0; c < sample.temperature.size(); ++c) log.temperature[c].push_back(sample.temperature[c]);
   }
   reader.finish();
+  log.time_origin = samples.time_origin();
   log.warnings = reader.warnings();
   return log;
 }

@@ -29,6 +29,8 @@ LogSpec DriftModel::log_spec() const {
   spec.time_column = time_column;
   spec.rate_hz = rate_hz;
   spec.gyro_unit = gyro_unit;
+  spec.time_unit = time_unit;
+  spec.scaling = scaling;
   for (const auto& axis : axes) {
     spec.gyro_columns.push_back(axis.gyro_column);
     spec.temperature_columns.push_back(axis.temperature_column);
@@ -57,6 +59,13 @@ nlohmann::json to_json(const DriftModel& model) {
                          {"gyro_unit", std::string(to_string(model.gyro_unit))},
                          {"axes", axes}};
   if (model.time_column) json["time_column"] = *model.time_column;
+  // Written only when not the default, so that files of logs in s, °C and °/h stay as they were.
+  if (model.time_unit != TimeUnit::s) json["time_unit"] = std::string(to_string(model.time_unit));
+  if (!model.scaling.is_default()) {
+    json["scaling"] = {{"temperature_scale", model.scaling.temperature_scale},
+                       {"temperature_offset", model.scaling.temperature_offset},
+                       {"gyro_scale", model.scaling.gyro_scale}};
+  }
   if (model.rate_hz) json["rate_hz"] = *model.rate_hz;
   if (!model.extra_temperature_columns.empty()) json["extra_temperature_columns"] = model.extra_temperature_columns;
   return json;
@@ -76,11 +85,23 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
     DriftModel model;
     model.gyro_unit = parse_gyro_unit(json.at("gyro_unit").get<std::string>());
     if (json.contains("time_column")) model.time_column = json.at("time_column").get<std::string>();
+    if (json.contains("time_unit")) model.time_unit = parse_time_unit(json.at("time_unit").get<std::string>());
     if (json.contains("rate_hz")) model.rate_hz = json.at("rate_hz").get<double>();
     if (json.contains("extra_temperature_columns")) {
       model.extra_temperature_columns = json.at("extra_temperature_columns").get<std::vector<std::string>>();
     }
     if (!json.at("axes").is_array() || json.at("axes").empty()) throw fail("model file has no axes");
+    if (json.contains("scaling")) {
+      const auto& scaling = json.at("scaling");
+      model.scaling.temperature_scale = scaling.value("temperature_scale", std::vector<double>{});
+      model.scaling.temperature_offset = scaling.value("temperature_offset", std::vector<double>{});
+      model.scaling.gyro_scale = scaling.value("gyro_scale", std::vector<double>{});
+      try {
+        model.scaling.check(json.at("axes").size(), json.at("axes").size() + model.extra_temperature_columns.size());
+      } catch (const UsageError& e) {
+        throw fail(fmt::format("scaling: {}", e.what()));
+      }
+    }
     std::size_t index = 0;
     for (const auto& entry : json.at("axes")) {
       try {

@@ -27,6 +27,29 @@ std::vector<std::size_t> temperature_channel_per_axis(const ChamberLog& log) {
                                log.source, log.temperature.size(), log.axes()));
 }
 
+namespace {
+
+// The log's scaling per model input: the axes' temperature columns (log channel
+// channels[a]), then the extra channels (log channels axes, axes + 1, ...); a list whose
+// values are all equal is kept as one value, so that a log naming one column for all
+// axes reads with the model's scaling too.
+LogScaling model_scaling(const LogScaling& log, const std::vector<std::size_t>& channels, std::size_t inputs) {
+  if (log.is_default()) return {};
+  auto per_input = [&](double (LogScaling::*value_of)(std::size_t) const, std::size_t count, bool temperature) {
+    std::vector<double> values;
+    for (std::size_t i = 0; i < count; ++i) {
+      values.push_back((log.*value_of)(temperature && i < channels.size() ? channels[i] : i));
+    }
+    if (std::all_of(values.begin(), values.end(), [&](double v) { return v == values.front(); })) values.resize(1);
+    return values;
+  };
+  return {per_input(&LogScaling::temperature_scale_of, inputs, true),
+          per_input(&LogScaling::temperature_offset_of, inputs, true),
+          per_input(&LogScaling::gyro_scale_of, channels.size(), false)};
+}
+
+}  // namespace
+
 std::vector<std::string> extra_temperature_columns(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                                                    const std::vector<Pipeline>& pipelines) {
   const ChamberLog& log = logs.front();
@@ -346,6 +369,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
   Calibration calibration;
   calibration.model.gyro_unit = spec.gyro_unit;
   calibration.model.time_column = spec.time_column;
+  calibration.model.time_unit = spec.time_unit;
   calibration.model.rate_hz = spec.rate_hz;
   const auto channels = temperature_channel_per_axis(first);
 
@@ -419,6 +443,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
   std::vector<Pipeline> pipelines;
   for (const auto& axis : calibration.model.axes) pipelines.push_back(axis.pipeline);
   calibration.model.extra_temperature_columns = extra_temperature_columns(logs, spec, pipelines);
+  calibration.model.scaling = model_scaling(spec.scaling, channels, calibration.model.temperature_inputs());
   return calibration;
 }
 

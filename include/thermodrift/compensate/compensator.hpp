@@ -23,6 +23,7 @@ class Compensator {
   // How far to trust one axis' output for this sample.
   struct AxisStatus {
     bool ready = false;          // false during this axis' warm-up (start or after a gap)
+    double since_start = 0;      // s since this axis' pipeline (re)started
     // The ready sample against the model's training envelope (features/envelope.hpp);
     // all false while not ready or when the model file has no envelope.
     Excursion outside_envelope;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "thermodrift/io/csv_reader.hpp"
+#include "thermodrift/io/time_stamp.hpp"
 
 namespace thermodrift {
 
@@ -18,14 +19,35 @@ GyroUnit parse_gyro_unit(std::string_view name);  // "dph", "dps", "radps"; Usag
 std::string_view to_string(GyroUnit unit);
 double degrees_per_hour(GyroUnit unit);  // factor from `unit` to °/h
 
-// Which columns of a log hold what. A column is named by its header name or by its
-// 1-based index.
+// Raw log values to the library's units: °C = temperature_scale·raw + temperature_offset,
+// °/h = degrees_per_hour(gyro_unit)·gyro_scale·raw. Each list holds one value for every
+// column or one per column, in the order the columns are named; empty means the default
+// (scale 1, offset 0).
+struct LogScaling {
+  std::vector<double> temperature_scale;
+  std::vector<double> temperature_offset;
+  std::vector<double> gyro_scale;
+
+  bool is_default() const;  // no value other than 1 (scales) and 0 (offsets)
+  // The value for one column (0-based among the temperature or the gyro columns).
+  double temperature_scale_of(std::size_t column) const;
+  double temperature_offset_of(std::size_t column) const;
+  double gyro_scale_of(std::size_t column) const;
+  // Throws UsageError when a list is neither one value nor one per column (a count of 0:
+  // not known yet, not checked), a value is not finite or a scale is 0.
+  void check(std::size_t gyro_columns, std::size_t temperature_columns) const;
+};
+
+// Which columns of a log hold what, and in what units. A column is named by its header
+// name or by its 1-based index.
 struct LogSpec {
-  std::optional<std::string> time_column;         // seconds; else rate_hz gives the time
+  std::optional<std::string> time_column;         // else rate_hz gives the time
+  TimeUnit time_unit = TimeUnit::s;               // of numbers in the time column (ISO 8601 stamps need none)
   std::optional<double> rate_hz;                  // sampling rate when there is no time column
   std::vector<std::string> gyro_columns;          // empty: every header name starting "gyro"
   std::vector<std::string> temperature_columns;   // empty: every header name starting "temp"
   GyroUnit gyro_unit = GyroUnit::dph;
+  LogScaling scaling;                             // raw counts to °C and °/h
   CsvOptions csv;                                 // tolerance for garbled rows
 };
 
@@ -39,12 +61,22 @@ struct LogColumns {
 };
 
 // Resolves `spec` against the reader's header. Throws DataError naming the header line
-// when a named column is not there, UsageError when the spec is incomplete.
+// when a named column is not there, UsageError when the spec is incomplete or its
+// scaling does not fit the columns (LogScaling::check).
 LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader);
+
+// Where a log's time starts: its first row's time stamp. Times in a log are seconds since
+// it, so no 1.7e9-sized epoch reaches the arithmetic downstream.
+struct TimeOrigin {
+  std::string text;               // the first row's time cell as written
+  TimeUnit unit = TimeUnit::s;    // unit it was read in (an ISO 8601 stamp: s since 1970 UTC)
+  TimeStamp stamp;                // exactly
+};
 
 struct ChamberLog {
   std::string source;                             // file it was read from
-  std::vector<double> time;                       // s, strictly increasing
+  std::vector<double> time;                       // s since time_origin (or row / rate), strictly increasing
+  std::optional<TimeOrigin> time_origin;          // absent without a time column
   std::vector<std::string> gyro_names;
   std::vector<std::vector<double>> gyro;          // [axis][row], °/h
   std::vector<std::string> temperature_names;
@@ -65,22 +97,40 @@ ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec);
 // Rows [begin, end) of a log, as a log of their own (a held-out cycle, say).
 ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end);
 
-// Reads the cells `columns` name from one row into time, gyro (°/h) and temperature
-// values. Returns false when the row was dropped as garbled (see CsvOptions); throws
-// DataError for NaN/Inf and, through check_time_order, for time out of order.
-// `row_index` counts the rows kept so far (time = row_index / rate without a time column).
 struct LogSample {
-  double time = 0;
-  std::vector<double> gyro;
-  std::vector<double> temperature;
+  double time = 0;                  // s since the first kept row's time (or row / rate)
+  std::vector<double> gyro;         // °/h
+  std::vector<double> temperature;  // °C
 };
-bool read_sample(CsvReader& reader, const CsvRow& row, const LogColumns& columns, const LogSpec& spec,
-                 std::size_t row_index, double previous_time, LogSample& sample);
 
-// Checks one row's time stamp against the previous one (NaN for the first row); throws
-// DataError when time goes backwards or repeats. Shared by the whole-file and the
-// streaming readers so both say the same.
-void check_time_order(double previous, double current, const std::string& file, std::size_t line,
-                      std::size_t column);
+// Reads a log's rows one at a time, as samples: the one reader behind read_chamber_log
+// and the streaming `thermodrift compensate`, so both read every row alike. Garbled rows
+// are dropped (see CsvOptions); NaN/Inf, a time stamp out of order or in the other form
+// (number / ISO 8601) than the first row's are DataErrors naming line and column.
+class LogSampleReader {
+ public:
+  // Resolves the columns (resolve_columns); `reader` must outlive this.
+  LogSampleReader(CsvReader& reader, const LogSpec& spec);
+
+  const LogColumns& columns() const { return columns_; }
+  const std::optional<TimeOrigin>& time_origin() const { return origin_; }
+  std::size_t rows() const { return rows_; }  // rows kept so far
+
+  // The next kept row, its cells read into `sample`; nothing at the end of the file.
+  std::optional<CsvRow> next(LogSample& sample);
+
+ private:
+  bool read(const CsvRow& row, LogSample& sample);
+  bool read_time(const CsvRow& row, TimeStamp& stamp);
+
+  CsvReader& reader_;
+  LogSpec spec_;
+  LogColumns columns_;
+  std::vector<double> gyro_factor_;  // °/h per raw unit, per gyro column
+  std::optional<TimeOrigin> origin_;
+  TimeStamp previous_;
+  std::string previous_text_;
+  std::size_t rows_ = 0;
+};
 
 }  // namespace thermodrift

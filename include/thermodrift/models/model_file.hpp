@@ -40,6 +40,10 @@ struct DriftModel {
   static constexpr int kFormatVersion = 1;
   GyroUnit gyro_unit = GyroUnit::dph;     // unit of the gyro columns the model reads
   std::optional<std::string> time_column;  // as in the training log's LogSpec
+  TimeUnit time_unit = TimeUnit::s;        // of the numbers in that column
+  // Raw values to °C and °/h as the training log was read: each list empty (default),
+  // one value for all, or one per axis (gyro) / per temperature input (temperature).
+  LogScaling scaling;
   std::optional<double> rate_hz;
   std::vector<AxisModel> axes;
   // Temperature columns after the axes' own, read only by grad terms (as named to the
