@@ -16,14 +16,27 @@ void DataOptions::add_to(CLI::App& app) {
       ->check(CLI::ExistingFile);
   app.add_option("--format", format, "csv (default) or libsvm")
       ->check(CLI::IsMember({"csv", "libsvm"}));
-  app.add_option("--time", time, "time column (seconds), header name or 1-based index");
+  app.add_option("--time", time, "time column (in --time-unit, or ISO 8601 stamps), header name or 1-based index");
   app.add_option("--rate", rate, "sampling rate in Hz when there is no time column")
       ->check(CLI::PositiveNumber);
   app.add_option("--gyro", gyro, "gyro column(s), one model per axis")->delimiter(',');
   app.add_option("--temp", temperature, "temperature column(s): one for all axes or one per axis, then any extra channels grad:A-B terms read")
       ->delimiter(',');
-  app.add_option("--gyro-unit", gyro_unit, "unit of the gyro columns: dph (°/h), dps (°/s), radps")
+  app.add_option("--gyro-unit", gyro_unit, "unit of the gyro columns: dph (°/h, default), dps (°/s), radps")
       ->check(CLI::IsMember({"dph", "dps", "radps"}));
+  app.add_option("--time-unit", time_unit,
+                 "unit of the numbers in the time column: s (default), ms, us, ns; ISO 8601 stamps are recognised "
+                 "without it")
+      ->check(CLI::IsMember({"s", "ms", "us", "ns"}));
+  app.add_option("--temp-scale", temperature_scale,
+                 "raw temperature to °C: °C = A·raw + B; one A for all temperature columns or one per column (default 1)")
+      ->delimiter(',');
+  app.add_option("--temp-offset", temperature_offset,
+                 "B of --temp-scale; one for all temperature columns or one per column (default 0)")
+      ->delimiter(',');
+  app.add_option("--gyro-scale", gyro_scale,
+                 "multiplies the gyro columns after --gyro-unit; one for all or one per gyro column (default 1)")
+      ->delimiter(',');
   app.add_option("--smooth", smooth, "moving-average window in seconds (default 100)")
       ->check(CLI::NonNegativeNumber);
 }
@@ -34,7 +47,10 @@ LogSpec DataOptions::spec() const {
   if (rate > 0) spec.rate_hz = rate;
   spec.gyro_columns = gyro;
   spec.temperature_columns = temperature;
-  spec.gyro_unit = parse_gyro_unit(gyro_unit);
+  spec.gyro_unit = parse_gyro_unit(gyro_unit.empty() ? "dph" : gyro_unit);
+  if (!time_unit.empty()) spec.time_unit = parse_time_unit(time_unit);
+  spec.scaling = {temperature_scale, temperature_offset, gyro_scale};
+  spec.scaling.check(0, 0);  // values now; their counts against the columns when the log is opened
   return spec;
 }
 
@@ -50,6 +66,12 @@ LogSpec DataOptions::spec_for(const DriftModel& model) const {
   }
   if (!gyro.empty()) spec.gyro_columns = gyro;
   if (!temperature.empty()) spec.temperature_columns = temperature;
+  const LogSpec given = this->spec();
+  if (!gyro_unit.empty()) spec.gyro_unit = given.gyro_unit;
+  if (!time_unit.empty()) spec.time_unit = given.time_unit;
+  if (!temperature_scale.empty()) spec.scaling.temperature_scale = temperature_scale;
+  if (!temperature_offset.empty()) spec.scaling.temperature_offset = temperature_offset;
+  if (!gyro_scale.empty()) spec.scaling.gyro_scale = gyro_scale;
   if (spec.gyro_columns.size() != model.axes.size()) {
     throw UsageError(fmt::format("the model has {} axes but {} gyro columns were named",
                                  model.axes.size(), spec.gyro_columns.size()));

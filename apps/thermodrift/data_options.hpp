@@ -20,15 +20,22 @@ struct DataOptions {
   double rate = 0;
   std::vector<std::string> gyro;
   std::vector<std::string> temperature;
-  std::string gyro_unit = "dph";
+  std::string gyro_unit;  // empty: not given (dph, or the model's)
+  std::string time_unit;  // empty: not given (s, or the model's)
+  std::vector<double> temperature_scale;  // empty: not given (1, or the model's)
+  std::vector<double> temperature_offset;
+  std::vector<double> gyro_scale;
   double smooth = 100;
 
-  // Declares --data, --format, --time, --rate, --gyro, --temp, --gyro-unit, --smooth.
+  // Declares --data, --format, --time, --rate, --gyro, --temp, --gyro-unit, --time-unit,
+  // --temp-scale, --temp-offset, --gyro-scale, --smooth.
   void add_to(CLI::App& app);
 
-  // The LogSpec the options name.
+  // The LogSpec the options name. UsageError for a zero or non-finite scale.
   LogSpec spec() const;
-  // The model's LogSpec, with any column option given on the command line taking over.
+  // The model's LogSpec (its columns, units and scaling, as fit read the training log),
+  // with any of those options given on the command line taking over: the log at hand
+  // may be named or recorded differently; the model itself works in °C, °/h and s.
   LogSpec spec_for(const DriftModel& model) const;
   bool smooth_given(const CLI::App& app) const { return app.count("--smooth") > 0; }
 

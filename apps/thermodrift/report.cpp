@@ -72,7 +72,9 @@ int run_report(const ReportArguments& args) {
   options.study.calibration.selection.method = args.identify;
   options.study.other_terms = args.features;
   if (args.split_time) {
-    const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time) - log.time.begin();
+    // S is on the log's clock (its time column in s); the log's times count from its first row.
+    const double origin = log.time_origin ? log.time_origin->stamp.approximate_seconds() : 0.0;
+    const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time - origin) - log.time.begin();
     options.study.split_row = static_cast<std::size_t>(row);
     options.study.split_description = fmt::format("held out from t = {:g} s on (--split-time)", *args.split_time);
   } else if (args.holdout_fraction) {
