@@ -215,7 +215,8 @@ std::optional<CsvRow> LogSampleReader::next(LogSample& sample) {
 
 bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
   const std::string& path = reader_.path();
-  // Read every needed cell before judging the row, so one garbled cell drops the row.
+  // Read every needed cell before judging the row, so one garbled cell drops the row
+  // before its time is judged against the previous row's.
   auto cell = [&](std::size_t index, double& value) {
     const auto status = parse_number(row.cell(index), value);
     if (status == CellStatus::ok) return true;
@@ -244,16 +245,24 @@ bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
     sample.time = static_cast<double>(rows_) / *spec_.rate_hz;
     return true;
   }
-  // Kept: the first kept row's stamp is the origin the others count from.
   const std::string_view text = row.cell(*columns_.time);
-  if (!origin_) origin_ = TimeOrigin{std::string(text), stamp.iso ? TimeUnit::s : spec_.time_unit, stamp};
+  if (origin_) {
+    const std::size_t column = *columns_.time + 1;
+    if (stamp == previous_) throw DataError(path, row.line, column, fmt::format("time {} repeats the previous row's", text));
+    if (stamp < previous_) {
+      throw DataError(path, row.line, column, fmt::format("time goes backwards ({} after {})", text, previous_text_));
+    }
+  } else {
+    // The first kept row's stamp is the origin the others count from.
+    origin_ = TimeOrigin{std::string(text), stamp.iso ? TimeUnit::s : spec_.time_unit, stamp};
+  }
   previous_ = stamp;
   previous_text_.assign(text);
   sample.time = stamp.seconds_since(origin_->stamp);
   return true;
 }
 
-// Reads the time cell exactly and checks it against the previous kept row's.
+// Reads the time cell exactly; false when the row was dropped as garbled.
 bool LogSampleReader::read_time(const CsvRow& row, TimeStamp& stamp) {
   const std::string& path = reader_.path();
   const std::size_t column = *columns_.time + 1;
@@ -274,10 +283,6 @@ bool LogSampleReader::read_time(const CsvRow& row, TimeStamp& stamp) {
                          fmt::format("'{}': expected {} like the first row's ('{}')", text,
                                      origin_->stamp.iso ? "an ISO 8601 time stamp" : "a number", origin_->text));
     return false;
-  }
-  if (stamp == previous_) throw DataError(path, row.line, column, fmt::format("time {} repeats the previous row's", text));
-  if (stamp < previous_) {
-    throw DataError(path, row.line, column, fmt::format("time goes backwards ({} after {})", text, previous_text_));
   }
   return true;
 }

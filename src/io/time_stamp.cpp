@@ -232,7 +232,8 @@ int decimal_exponent(TimeUnit unit) {
 double TimeStamp::seconds_since(const TimeStamp& origin) const {
   const std::int64_t whole = seconds - origin.seconds;
   const std::int64_t atto = attoseconds - origin.attoseconds;  // |atto| < 10^18
-  return static_cast<double>(whole) + static_cast<double>(atto) * 1e-18;
+  // 10^18 is a double exactly: the fraction of a stamp in ns, µs or ms divides with one rounding.
+  return static_cast<double>(whole) + static_cast<double>(atto) / 1e18;
 }
 
 double TimeStamp::approximate_seconds() const { return seconds_since(TimeStamp{}); }
