@@ -4,6 +4,7 @@
 // warm-up, a gap in time, a device sampling faster than the rings are sized for).
 #include "thermodrift/compensate/c_export.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -344,6 +345,64 @@ TEST_F(CExport, WarmUpAndGapRestartLikeTheCompensator) {
     const bool warm_after_gap = cut.time[5000 + i] - cut.time[5000] >= 200;
     EXPECT_EQ(cpp.ready[5000 + i], warm_after_gap ? 1 : 0) << 5000 + i;
   }
+}
+
+// A model of a raw-count log: the header takes the values as the log holds them (gyro in
+// rad/s before a per-axis scale, temperature counts) and converts them as the reader
+// does; the compensator gets the log as the reader converts it.
+TEST_F(CExport, RawInputsMatchTheCompensatorOnTheLogAsRead) {
+  DriftModel model = *linear_;
+  model.gyro_unit = GyroUnit::radps;
+  model.scaling = {{0.00390625}, {-231, -230.5, -229}, {0.5, 0.25, 2}};
+  const LogSpec spec = model.log_spec();
+  ASSERT_EQ(spec.temperature_columns.size(), log_->temperature.size());
+  std::string csv = "time_s";
+  for (const auto& name : spec.gyro_columns) csv += "," + name;
+  for (const auto& name : spec.temperature_columns) csv += "," + name;
+  csv += "\n";
+  for (std::size_t i = 0; i < log_->rows(); ++i) {
+    csv += fmt::format("{}", log_->time[i]);
+    for (std::size_t a = 0; a < log_->axes(); ++a) {
+      csv += fmt::format(",{:.17g}", log_->gyro[a][i] / degrees_per_hour(model.gyro_unit) / model.scaling.gyro_scale_of(a));
+    }
+    for (std::size_t c = 0; c < log_->temperature.size(); ++c) {
+      csv += fmt::format(",{:.17g}", (log_->temperature[c][i] - model.scaling.temperature_offset_of(c)) /
+                                         model.scaling.temperature_scale_of(c));
+    }
+    csv += "\n";
+  }
+  TempDir dir;
+  const std::string path = dir.write("raw.csv", csv);
+  const ChamberLog as_read = read_chamber_log(path, spec);
+  LogSpec unscaled = spec;
+  unscaled.gyro_unit = GyroUnit::dph;
+  unscaled.scaling = {};
+  const ChamberLog raw = read_chamber_log(path, unscaled);
+  EXPECT_NEAR(raw.temperature[0][0], (as_read.temperature[0][0] + 231) * 256, 1e-6);
+
+  for (const bool single : {false, true}) {
+    CExportOptions options;
+    options.max_rate_hz = 1.0;
+    options.single_precision = single;
+    const std::string header = export_c_header(model, options);
+    EXPECT_NE(header.find("#define THERMODRIFT_RAW_INPUTS 1"), std::string::npos);
+    const CRun c = run_exported(dir, header, raw);
+    const CppRun cpp = run_compensator(model, as_read);
+    ASSERT_EQ(c.ready.size(), raw.rows());
+    EXPECT_EQ(c.ready, cpp.ready);
+    ASSERT_GT(cpp.drift_scale, 0.1);
+    EXPECT_LE(largest_relative_difference(c, cpp), single ? 1e-5 : 1e-9) << (single ? "float" : "double");
+  }
+  // Fed the converted values instead, the header is far off: it did convert.
+  const CRun wrong = run_exported(dir, export_c_header(model, {.max_rate_hz = 1.0}), as_read);
+  EXPECT_GT(largest_relative_difference(wrong, run_compensator(model, as_read)), 1.0);
+}
+
+TEST_F(CExport, DefaultScalingKeepsTheHeaderTakingDegreesPerHourAndDegreesC) {
+  DriftModel model = *linear_;
+  model.scaling = {{1}, {0}, {1}};  // written out, but the default
+  EXPECT_EQ(export_c_header(model, {}), export_c_header(*linear_, {}));
+  EXPECT_NE(export_c_header(model, {}).find("#define THERMODRIFT_RAW_INPUTS 0"), std::string::npos);
 }
 
 TEST_F(CExport, DeviceFasterThanMaxRateDropsAndFlagsWithoutOverflow) {
