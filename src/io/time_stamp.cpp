@@ -98,7 +98,7 @@ unsigned days_in_month(std::int64_t year, unsigned month) {
   return month == 2 && leap_year(year) ? 29 : kDays[month - 1];
 }
 
-// YYYY-MM-DD(T| )hh:mm:ss[(.|,)fraction](Z|(+|-)hh[:mm]|(+|-)hhmm), read left to right;
+// YYYY-MM-DD(T| )hh:mm:ss[(.|,)fraction][Z|(+|-)hh[:mm]|(+|-)hhmm], read left to right;
 // the first thing out of place is named with its character position.
 class IsoReader {
  public:
@@ -143,11 +143,10 @@ class IsoReader {
         if (!number(2, offset_minutes, "two-digit minutes of the UTC offset (00-59)", 0, 59)) return report(problem);
       }
       offset_seconds = sign * (offset_hours * 3600 + offset_minutes * 60);
-    } else {
-      expected_ = at_ < cell_.size() ? "a fraction, 'Z' or a UTC offset (+hh:mm) after the seconds"
-                                     : "'Z' or a UTC offset (+hh:mm) after the seconds";
+    } else if (at_ < cell_.size()) {
+      expected_ = "a fraction, 'Z' or a UTC offset (+hh:mm) after the seconds";
       return report(problem);
-    }
+    }  // no zone: the logger's local clock, read as UTC (differences exact but across a DST change)
     if (at_ != cell_.size()) {
       expected_ = "the end of the time stamp";
       return report(problem);

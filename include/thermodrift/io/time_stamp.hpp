@@ -39,9 +39,9 @@ struct TimeStamp {
 bool looks_like_iso_8601(std::string_view cell);
 
 // Reads one time cell: an ISO 8601 date and time ("2026-03-07T15:45:00.123Z", a space for
-// the T, a fraction of any length, Z or an offset +01:00 / -0530), else a decimal number
-// (sign, fraction, exponent) in `unit`. Returns false with what was expected in *problem
-// (one line, naming the cell) when the cell is neither.
+// the T, a fraction of any length, Z, an offset +01:00 / -0530, or no zone: read as UTC),
+// else a decimal number (sign, fraction, exponent) in `unit`. Returns false with what was
+// expected in *problem (one line, naming the cell) when the cell is neither.
 bool parse_time_stamp(std::string_view cell, TimeUnit unit, TimeStamp& stamp, std::string* problem);
 
 // Days from 1970-01-01 to the proleptic Gregorian date y-m-d (H. Hinnant's days_from_civil).

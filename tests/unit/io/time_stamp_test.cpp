@@ -119,6 +119,12 @@ TEST(Iso8601, NoFractionLongFractionAndASpaceForTheT) {
   EXPECT_EQ(read("2026-03-07T15:45:00Z", TimeUnit::ns), read("2026-03-07T15:45:00Z"));
 }
 
+TEST(Iso8601, WithoutAZoneTheWallClockIsReadAsUtc) {
+  // Loggers often write local time without a zone: differences between rows stay exact.
+  EXPECT_EQ(read("2026-03-07T15:45:00.25"), read("2026-03-07T15:45:00.25Z"));
+  EXPECT_EQ(read("2026-03-07 15:45:01").seconds_since(read("2026-03-07 15:44:59.5")), 1.5);
+}
+
 TEST(Iso8601, LeapDayAndTheTurnOfTheYear) {
   EXPECT_EQ(read("2028-03-01T00:00:00Z").seconds - read("2028-02-28T00:00:00Z").seconds, 2 * 86400);
   EXPECT_EQ(read("2027-01-01T00:00:00Z").seconds - read("2026-12-31T23:59:59Z").seconds, 1);
@@ -135,7 +141,7 @@ TEST(Iso8601, MalformedStampsSayWhatWasExpectedWhere) {
            Case{"2026-02-30T15:45:00Z", "expected a day of 2026-02 (01-28) at character 9"},
            Case{"2026-03-07X15:45:00Z", "expected 'T' or a space between date and time at character 11"},
            Case{"2026-03-07T25:45:00Z", "expected two-digit hours (00-23) at character 12"},
-           Case{"2026-03-07T15:45:00", "expected 'Z' or a UTC offset (+hh:mm) after the seconds at character 20"},
+           Case{"2026-03-07T15:45:00 ", "expected a fraction, 'Z' or a UTC offset (+hh:mm) after the seconds at character 20"},
            Case{"2026-03-07T15:45:00.Z", "expected digits of a fraction of a second at character 21"},
            Case{"2026-03-07T15:45:00+1:00", "expected two-digit hours of the UTC offset (00-23) at character 21"},
            Case{"2026-03-07T15:45:00Zjunk", "expected the end of the time stamp at character 21"},
