@@ -3,7 +3,8 @@
 //
 //   build/bin/generalization_bench [--seeds acceptance|development|S,S,...] [--limit N]
 //                                  [--methods paper,linear,stepwise,svr] [--threads N]
-//                                  [--evaluations N] [--json FILE]
+//                                  [--evaluations N] [--training cycle|two-runs]
+//                                  [--folds-by time|runs] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
 // is the training log, cycle 2 the "next cycle". Two other profiles of two distinct
@@ -11,7 +12,9 @@
 // the same unit (powered on anew, their own noise). Each method is calibrated once per
 // law, as `thermodrift fit` would calibrate it, and evaluated on each test log with
 // 1800 s of settling; the ratio is the held-out MSE over the simulator's true noise floor
-// of that log from 1800 s on (a perfect model scores 1). docs/generalization.md says what
+// of that log from 1800 s on (a perfect model scores 1). --training two-runs adds to
+// cycle 1 a second training run of a third kind of programme (neither test kind), as a
+// user with two chamber runs would fit them (--data twice). docs/generalization.md says what
 // the methods are and has measured figures.
 #include <time.h>
 
@@ -77,6 +80,8 @@ struct Arguments {
   long evaluations = SvrTuningOptions{}.evaluations;
   std::string json;
   FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;  // --features auto's search
+  bool two_runs = false;                        // --training two-runs
+  FoldsBy folds_by = CalibrationOptions{}.folds_by;
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -97,7 +102,7 @@ Arguments parse(int argc, char** argv) {
     if (i + 1 >= argc) {
       fmt::print(stderr, "usage: {} [--seeds acceptance|development|S,S,...] [--limit N] [--methods "
                          "paper,linear,stepwise,svr] [--threads N] [--evaluations N] [--identify greedy|thermal-node] "
-                         "[--json FILE]\n", argv[0]);
+                         "[--training cycle|two-runs] [--folds-by time|runs] [--json FILE]\n", argv[0]);
       std::exit(2);
     }
     const std::string value = argv[++i];
@@ -110,6 +115,8 @@ Arguments parse(int argc, char** argv) {
       args.identify = value == "greedy" ? FeatureSelectionOptions::Method::greedy
                                         : FeatureSelectionOptions::Method::thermal_node;
     }
+    else if (flag == "--training" && (value == "cycle" || value == "two-runs")) args.two_runs = value == "two-runs";
+    else if (flag == "--folds-by") args.folds_by = parse_folds_by(value);
     else if (flag == "--methods") {
       args.methods.clear();
       for (const auto& name : split(value)) args.methods.push_back(parse_method(name));
@@ -156,14 +163,26 @@ TestLog make_test(std::string name, const sim::ChamberRun& run) {
 // Two distinct kinds of programme, drawn from the law's seed (the engine's raw output, which
 // is the same with every standard library). Over the 40 development seeds each kind is
 // drawn 11-22 times in all, though seeds 1-4 all draw partial first.
+constexpr std::array<sim::ProfileKind, 5> other_kinds = {sim::ProfileKind::slow, sim::ProfileKind::fast,
+                                                         sim::ProfileKind::staircase, sim::ProfileKind::partial,
+                                                         sim::ProfileKind::wander};
+
 std::array<sim::ProfileKind, 2> other_profiles(std::uint64_t law_seed) {
-  static constexpr std::array<sim::ProfileKind, 5> kinds = {sim::ProfileKind::slow, sim::ProfileKind::fast,
-                                                            sim::ProfileKind::staircase, sim::ProfileKind::partial,
-                                                            sim::ProfileKind::wander};
   std::mt19937_64 engine(sim::derive_seed(law_seed, 0x0b1));
-  const std::uint64_t first = engine() % kinds.size();
-  const std::uint64_t second = (first + 1 + engine() % (kinds.size() - 1)) % kinds.size();
-  return {kinds[first], kinds[second]};
+  const std::uint64_t first = engine() % other_kinds.size();
+  const std::uint64_t second = (first + 1 + engine() % (other_kinds.size() - 1)) % other_kinds.size();
+  return {other_kinds[first], other_kinds[second]};
+}
+
+// --training two-runs: the second training run's kind, one of the three the tests do not use.
+sim::ProfileKind second_training_profile(std::uint64_t law_seed) {
+  const auto tested = other_profiles(law_seed);
+  std::vector<sim::ProfileKind> left;
+  for (sim::ProfileKind kind : other_kinds) {
+    if (kind != tested[0] && kind != tested[1]) left.push_back(kind);
+  }
+  std::mt19937_64 engine(sim::derive_seed(law_seed, 0x0b2));
+  return left[engine() % left.size()];
 }
 
 // What `thermodrift fit --model M [--features auto]` asks of calibrate (apps/thermodrift/fit.cpp
@@ -201,7 +220,11 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, seed, 2), sim::derive_seed(seed, 1));
   const std::size_t second_cycle = training_run.cycle_start_rows().at(1);
   const sim::ChamberRun first = slice(training_run, 0, second_cycle);
-  const std::vector<ChamberLog> training{sim::to_chamber_log(first)};
+  std::vector<ChamberLog> training{sim::to_chamber_log(first)};
+  if (args.two_runs) {
+    const sim::Setpoint programme = sim::draw_profile(second_training_profile(seed), unit, sim::derive_seed(seed, 14));
+    training.push_back(sim::to_chamber_log(sim::simulate_unit(unit, programme, sim::derive_seed(seed, 4))));
+  }
   const std::array<double, 3> training_floor = first.noise_floor(smoothing_s);
 
   std::vector<TestLog> tests;
@@ -229,6 +252,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     try {
       CalibrationOptions options = fit_options(method, args.evaluations);
       options.selection.method = args.identify;
+      options.folds_by = args.folds_by;
       if (chooses_features(options)) {
         if (selections.empty()) {
           const Stopwatch search_clock;
@@ -280,8 +304,9 @@ int main(int argc, char** argv) {
 
   fmt::print("generalization_bench: {} law(s) (--seeds {}), methods {}, AFSA budget {}, {} thread(s)\n",
              args.seeds.size(), args.seed_list, method_list(args.methods), args.evaluations, args.threads);
-  fmt::print("train: cycle 1 of a two-cycle `cycle` programme; tests: cycle 2 (next cycle) and two other "
+  fmt::print("train: cycle 1 of a two-cycle `cycle` programme{}; tests: cycle 2 (next cycle) and two other "
              "profiles (new runs of the unit); settle {:g} s; ratio = held-out MSE / true noise floor ({:g} s smoothing)\n\n",
+             args.two_runs ? fmt::format(" and a run of a third kind of programme (folds by {})", to_string(args.folds_by)) : "",
              settle_s, smoothing_s);
 
   // Laws are independent and every seed is fixed: --threads changes the order they finish in only.
@@ -326,6 +351,8 @@ int main(int argc, char** argv) {
                           {"settle_s", settle_s},
                           {"smoothing_s", smoothing_s},
                           {"evaluations", args.evaluations},
+                          {"training", args.two_runs ? "two-runs" : "cycle"},
+                          {"folds_by", to_string(args.folds_by)},
                           {"interrupted", stopped},
                           {"laws", laws_json(done)}};
     write_file_atomically(args.json, out.dump(1) + "\n");
