@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/bursts.hpp"
 
 namespace thermodrift::cli {
 
@@ -79,12 +80,18 @@ LogSpec DataOptions::spec_for(const DriftModel& model) const {
   return spec;
 }
 
-std::vector<ChamberLog> DataOptions::read(const LogSpec& spec) const {
+std::vector<ChamberLog> DataOptions::read(const LogSpec& spec, double warm_up_seconds) const {
   if (format != "csv") throw UsageError("this command reads CSV logs only (--format csv)");
   std::vector<ChamberLog> logs;
   for (const auto& file : files) {
     logs.push_back(read_chamber_log(file, spec));
     for (const auto& warning : logs.back().warnings) warn(warning);
+    if (const auto bursts = find_bursts(logs.back(), warm_up_seconds)) {
+      logs.back() = collapse_bursts(logs.back(), *bursts);
+      std::fprintf(stderr, "thermodrift: %s: burst log, %s: each burst's mean is one sample (%zu rows -> %zu); "
+                   "smoothing and rates work on the burst means\n",
+                   file.c_str(), bursts->describe().c_str(), bursts->rows, logs.back().rows());
+    }
   }
   return logs;
 }

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,9 +39,16 @@ struct DataOptions {
   // may be named or recorded differently; the model itself works in °C, °/h and s.
   LogSpec spec_for(const DriftModel& model) const;
   bool smooth_given(const CLI::App& app) const { return app.count("--smooth") > 0; }
+  // The warm-up of a pipeline with --smooth and `rate_span` (0: the default, the smoothing
+  // window, at least 1 s), as calibrate builds it.
+  double warm_up_seconds(double rate_span = 0) const {
+    return smooth + (rate_span > 0 ? rate_span : std::max(smooth, 1.0));
+  }
 
-  // Reads every --data file; warnings (skipped banners, dropped rows) go to stderr.
-  std::vector<ChamberLog> read(const LogSpec& spec) const;
+  // Reads every --data file; warnings (skipped banners, dropped rows) go to stderr. A
+  // burst log whose bursts are shorter than `warm_up_seconds` (the pipeline's smoothing +
+  // rate span) is collapsed to one sample per burst (io/bursts.hpp), said in one line.
+  std::vector<ChamberLog> read(const LogSpec& spec, double warm_up_seconds) const;
 };
 
 // Declares --identify thermal-node|greedy (how `--features auto` finds the terms) for fit,

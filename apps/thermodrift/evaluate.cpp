@@ -30,7 +30,9 @@ int run_evaluate(const EvaluateArguments& args) {
     const auto& file = args.data.files.front();
     evaluations.push_back({evaluate_libsvm(model, read_libsvm(file), file), std::nullopt});
   } else {
-    logs = args.data.read(args.data.spec_for(model));
+    double warm_up = 0;
+    for (const auto& axis : model.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
+    logs = args.data.read(args.data.spec_for(model), warm_up);
     evaluations = evaluate_axes(model, logs, args.settle);
     double longest = 0;
     for (const auto& axis : model.axes) longest = std::max(longest, axis.pipeline.longest_time_constant());

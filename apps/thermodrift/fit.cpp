@@ -97,7 +97,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     calibration = calibrate_libsvm(read_libsvm(args.data.files.front()), args.data.files.front(), options);
   } else {
     const LogSpec spec = args.data.spec();
-    logs = args.data.read(spec);
+    logs = args.data.read(spec, args.data.warm_up_seconds(args.rate_span));
     axis_count = logs.front().axes();
     calibration = calibrate(logs, spec, options);
   }
@@ -137,6 +137,27 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     axes.push_back(entry);
   }
   result["axes"] = axes;
+  if (!logs.empty()) {  // how many samples each step used (the first axis; the others alike)
+    std::size_t rows = 0, samples = 0, bursts = 0;
+    for (const auto& log : logs) {
+      rows += log.bursts ? log.bursts->rows : log.rows();
+      samples += log.rows();
+      if (log.bursts) bursts += log.bursts->bursts;
+    }
+    const auto& first = calibration.model.axes.front();
+    result["samples"] = {{"rows", rows},
+                         {"burst_means", bursts},
+                         {"ready", calibration.axes.front().in_sample.samples},
+                         {"fitted", calibration.axes.front().training_samples},
+                         {"decimation", first.pipeline.decimation}};
+    if (!args.json) {
+      fmt::print("samples: {} rows in {} log(s){} -> {} ready after the warm-up ({:g} s) -> {} fitted ({})\n",
+                 rows, logs.size(), bursts ? fmt::format(" -> {} burst means", samples) : "",
+                 calibration.axes.front().in_sample.samples, first.pipeline.warm_up_seconds(),
+                 calibration.axes.front().training_samples,
+                 first.pipeline.decimation == 1 ? std::string("all") : fmt::format("one in {}", first.pipeline.decimation));
+    }
+  }
   print_axes(result, args.json,
              fmt::format("{} model written to {} (metrics in-sample, on the training data: optimistic)",
                          args.model, args.out));

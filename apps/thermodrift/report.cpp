@@ -55,7 +55,7 @@ int run_report(const ReportArguments& args) {
   if (args.data.files.size() != 1) throw UsageError("report reads one log (--data FILE)");
   check_output_folder(args.out);  // before the log is read and the study run
   const LogSpec spec = args.data.spec();
-  const ChamberLog log = args.data.read(spec).front();
+  const ChamberLog log = args.data.read(spec, args.data.warm_up_seconds()).front();
   ReportOptions options;
   options.out_dir = args.out;
   options.seed = args.seed;

@@ -188,7 +188,10 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
 FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log,
                                  std::size_t gyro_axis, std::size_t temperature_channel,
                                  bool decimate) {
-  FeatureStream stream(pipeline);
+  // Burst means are a burst period apart: steps up to two missed bursts join them.
+  Pipeline joined = pipeline;
+  if (log.bursts) joined.gap_seconds = std::max(pipeline.effective_gap_seconds(), log.bursts->gap_seconds());
+  FeatureStream stream(joined);
   const std::size_t step = decimate ? pipeline.decimation : 1;
   std::vector<double> flat;
   std::vector<double> target;

@@ -115,6 +115,11 @@ Pipeline make_pipeline(const std::vector<ChamberLog>& logs, std::size_t axis,
     count += channel.size();
   }
   pipeline.reference_temperature = count ? sum / static_cast<double>(count) : 0.0;
+  // Trained on burst means: the model keeps their gap threshold, so that compensate,
+  // streaming the burst log's rows, carries its state from one burst to the next.
+  for (const auto& log : logs) {
+    if (log.bursts) pipeline.gap_seconds = std::max(pipeline.effective_gap_seconds(), log.bursts->gap_seconds());
+  }
   pipeline.validate();
   return pipeline;
 }

@@ -73,6 +73,18 @@ struct TimeOrigin {
   TimeStamp stamp;                // exactly
 };
 
+// What a burst log's bursts were (io/bursts.hpp): each burst's mean is one row of the log.
+struct BurstSummary {
+  std::size_t bursts = 0;
+  std::size_t rows = 0;               // rows of the file they hold
+  double median_samples = 0;          // rows per burst
+  double median_duration_s = 0;       // first to last row of a burst
+  double period_s = 0;                // median step between burst means
+  // Steps up to this many seconds join burst means (two bursts missed in a row: a gap).
+  double gap_seconds() const { return 2.5 * period_s; }
+  std::string describe() const;       // "72 bursts of 250 samples (5 s) every 300 s"
+};
+
 struct ChamberLog {
   std::string source;                             // file it was read from
   std::vector<double> time;                       // s since time_origin (or row / rate), strictly increasing
@@ -83,6 +95,7 @@ struct ChamberLog {
   std::vector<std::vector<double>> temperature;   // [channel][row], °C
   std::vector<std::size_t> line;                  // file line of each row
   std::vector<std::string> warnings;              // skipped banners, dropped cut-short rows
+  std::optional<BurstSummary> bursts;             // set when each row is a burst's mean
 
   std::size_t rows() const { return time.size(); }
   std::size_t axes() const { return gyro.size(); }

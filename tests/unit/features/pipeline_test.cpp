@@ -1,5 +1,6 @@
 // The feature pipeline: ΔT and rate on known temperature histories, warm-up, gaps,
 // decimation, and the pipeline as JSON.
+#include "../../support/chamber_logs.hpp"
 #include "thermodrift/features/pipeline.hpp"
 
 #include <gtest/gtest.h>
@@ -22,19 +23,7 @@ Pipeline ramp_pipeline() {
   return pipeline;
 }
 
-// A log of one axis from explicit samples.
-ChamberLog make_log(const std::vector<double>& time, const std::vector<double>& gyro,
-                    const std::vector<double>& temperature) {
-  ChamberLog log;
-  log.source = "memory";
-  log.time = time;
-  log.gyro_names = {"gyro_x"};
-  log.gyro = {gyro};
-  log.temperature_names = {"temp"};
-  log.temperature = {temperature};
-  for (std::size_t i = 0; i < time.size(); ++i) log.line.push_back(i + 2);
-  return log;
-}
+using testing::one_axis_log;
 
 TEST(FeatureStream, RateOfALinearRampIsItsSlopeInDegreesPerMinute) {
   const Pipeline pipeline = ramp_pipeline();
@@ -157,7 +146,7 @@ TEST(BuildFeatureTable, KeepsOnlyReadySamplesOfTheChosenAxis) {
     gyro.push_back(2.0);
     temperature.push_back(20 + 0.1 * k);
   }
-  const FeatureTable table = build_feature_table(pipeline, make_log(time, gyro, temperature), 0, 0, false);
+  const FeatureTable table = build_feature_table(pipeline, one_axis_log(time, gyro, temperature), 0, 0, false);
   ASSERT_EQ(table.rows(), 70u);  // t = 30 .. 99
   EXPECT_EQ(table.row.front(), 30u);
   EXPECT_EQ(table.time.front(), 30.0);
@@ -181,7 +170,7 @@ TEST(BuildFeatureTable, DecimationKeepsEveryKthReadySampleAndRestartsAfterAGap) 
     gyro.push_back(std::sin(time[i]));
     temperature.push_back(20 + 0.01 * time[i] * time[i]);
   }
-  const ChamberLog log = make_log(time, gyro, temperature);
+  const ChamberLog log = one_axis_log(time, gyro, temperature);
   const FeatureTable every = build_feature_table(pipeline, log, 0, 0, false);
   const FeatureTable kept = build_feature_table(pipeline, log, 0, 0, true);
   ASSERT_EQ(every.rows(), 70u + 50u);
@@ -210,7 +199,7 @@ TEST(BuildFeatureTable, AppendRowsConcatenates) {
     gyro.push_back(k);
     temperature.push_back(20);
   }
-  const ChamberLog log = make_log(time, gyro, temperature);
+  const ChamberLog log = one_axis_log(time, gyro, temperature);
   FeatureTable table;
   append_rows(table, build_feature_table(pipeline, log, 0, 0, false));
   append_rows(table, build_feature_table(pipeline, log, 0, 0, false));
