@@ -131,6 +131,10 @@ int run_compensate(const CompensateArguments& args) {
   out.commit();
   const std::size_t rows = samples.rows();
   report_trust(compensator.model(), trust, rows);
+  if (spec.despike) {
+    note_despiked(path, samples.columns().gyro_names, samples.despiked_gyro(), samples.columns().temperature_names,
+                  samples.despiked_temperature());
+  }
   std::fprintf(stderr, "thermodrift: %s: %zu of %zu rows not ready (warm-up / gaps)\n", path.c_str(), not_ready_rows,
                rows);
   return 0;

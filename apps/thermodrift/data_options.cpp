@@ -1,6 +1,7 @@
 #include "data_options.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cstdio>
 
@@ -10,6 +11,23 @@
 namespace thermodrift::cli {
 
 void warn(const std::string& message) { std::fprintf(stderr, "thermodrift: warning: %s\n", message.c_str()); }
+
+void note_despiked(const std::string& file, const std::vector<std::string>& gyro_names,
+                   const std::vector<std::size_t>& gyro, const std::vector<std::string>& temperature_names,
+                   const std::vector<std::size_t>& temperature) {
+  std::size_t total = 0;
+  std::vector<std::string> parts;
+  for (std::size_t a = 0; a < gyro.size() && a < gyro_names.size(); ++a) {
+    total += gyro[a];
+    parts.push_back(fmt::format("{} {}", gyro_names[a], gyro[a]));
+  }
+  for (std::size_t c = 0; c < temperature.size() && c < temperature_names.size(); ++c) {
+    total += temperature[c];
+    parts.push_back(fmt::format("{} {}", temperature_names[c], temperature[c]));
+  }
+  std::fprintf(stderr, "thermodrift: %s: despike replaced %zu sample%s (%s)\n", file.c_str(), total,
+               total == 1 ? "" : "s", fmt::format("{}", fmt::join(parts, ", ")).c_str());
+}
 
 void DataOptions::add_to(CLI::App& app) {
   app.add_option("--data", files, "the log(s): CSV, header row or not; several are fitted together")
@@ -40,6 +58,9 @@ void DataOptions::add_to(CLI::App& app) {
       ->delimiter(',');
   app.add_option("--smooth", smooth, "moving-average window in seconds (default 100)")
       ->check(CLI::NonNegativeNumber);
+  app.add_flag("--despike", despike,
+               "replace isolated outliers of every gyro and temperature column (a causal Hampel filter: more than "
+               "6 robust sigmas from the median of the 30 samples before); off by default; the model keeps it");
 }
 
 LogSpec DataOptions::spec() const {
@@ -52,6 +73,7 @@ LogSpec DataOptions::spec() const {
   if (!time_unit.empty()) spec.time_unit = parse_time_unit(time_unit);
   spec.scaling = {temperature_scale, temperature_offset, gyro_scale};
   spec.scaling.check(0, 0);  // values now; their counts against the columns when the log is opened
+  if (despike) spec.despike = DespikeOptions{};
   return spec;
 }
 
@@ -73,6 +95,7 @@ LogSpec DataOptions::spec_for(const DriftModel& model) const {
   if (!temperature_scale.empty()) spec.scaling.temperature_scale = temperature_scale;
   if (!temperature_offset.empty()) spec.scaling.temperature_offset = temperature_offset;
   if (!gyro_scale.empty()) spec.scaling.gyro_scale = gyro_scale;
+  if (despike && !spec.despike) spec.despike = DespikeOptions{};
   if (spec.gyro_columns.size() != model.axes.size()) {
     throw UsageError(fmt::format("the model has {} axes but {} gyro columns were named",
                                  model.axes.size(), spec.gyro_columns.size()));
@@ -86,6 +109,10 @@ std::vector<ChamberLog> DataOptions::read(const LogSpec& spec, double warm_up_se
   for (const auto& file : files) {
     logs.push_back(read_chamber_log(file, spec));
     for (const auto& warning : logs.back().warnings) warn(warning);
+    if (spec.despike) {
+      const ChamberLog& log = logs.back();
+      note_despiked(file, log.gyro_names, log.despiked_gyro, log.temperature_names, log.despiked_temperature);
+    }
     if (const auto bursts = find_bursts(logs.back(), warm_up_seconds)) {
       logs.back() = collapse_bursts(logs.back(), *bursts);
       std::fprintf(stderr, "thermodrift: %s: burst log, %s: each burst's mean is one sample (%zu rows -> %zu); "

@@ -27,6 +27,7 @@ struct DataOptions {
   std::vector<double> temperature_offset;
   std::vector<double> gyro_scale;
   double smooth = 100;
+  bool despike = false;  // --despike: the causal Hampel filter (io/despike.hpp)
 
   // Declares --data, --format, --time, --rate, --gyro, --temp, --gyro-unit, --time-unit,
   // --temp-scale, --temp-offset, --gyro-scale, --smooth.
@@ -57,5 +58,10 @@ void add_identify_option(CLI::App& app, FeatureSelectionOptions::Method& method)
 
 // "thermodrift: warning: ..." on stderr.
 void warn(const std::string& message);
+
+// "thermodrift: FILE: despike replaced N samples (gyro_x 1, temp_x 0, ...)" on stderr.
+void note_despiked(const std::string& file, const std::vector<std::string>& gyro_names,
+                   const std::vector<std::size_t>& gyro, const std::vector<std::string>& temperature_names,
+                   const std::vector<std::size_t>& temperature);
 
 }  // namespace thermodrift::cli

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "data_options.hpp"
 #include "thermodrift/compensate/c_export.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
@@ -36,6 +37,10 @@ int run_export(const ExportArguments& args) {
   const std::string header = export_c_header(model, options);
   write_file_atomically(args.out, header, {args.model_file});
 
+  if (model.despike) {
+    warn("the model was fitted with --despike; the header does not despike: filter isolated outliers before "
+         "step (docs/export.md)");
+  }
   const double rate = export_max_rate_hz(model, options);
   fmt::print("wrote {} ({}, rings sized for {} Hz)\n", args.out,
              options.single_precision ? "float" : "double", rate);

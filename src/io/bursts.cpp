@@ -76,6 +76,8 @@ ChamberLog collapse_bursts(const ChamberLog& log, const BurstSummary& bursts) {
   out.gyro_names = log.gyro_names;
   out.temperature_names = log.temperature_names;
   out.warnings = log.warnings;
+  out.despiked_gyro = log.despiked_gyro;
+  out.despiked_temperature = log.despiked_temperature;
   out.gyro.resize(log.gyro.size());
   out.temperature.resize(log.temperature.size());
   auto mean = [](const std::vector<double>& values, std::size_t begin, std::size_t end) {

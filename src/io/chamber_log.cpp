@@ -188,6 +188,7 @@ ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end)
   part.source = log.source;
   part.time = cut(log.time);
   part.time_origin = log.time_origin;
+  part.bursts = log.bursts;  // its rows are still burst means
   part.gyro_names = log.gyro_names;
   part.temperature_names = log.temperature_names;
   for (const auto& g : log.gyro) part.gyro.push_back(cut(g));
@@ -201,12 +202,30 @@ LogSampleReader::LogSampleReader(CsvReader& reader, const LogSpec& spec)
     : reader_(reader), spec_(spec), columns_(resolve_columns(spec, reader)) {
   const double to_dph = degrees_per_hour(spec.gyro_unit);
   for (std::size_t a = 0; a < columns_.gyro.size(); ++a) gyro_factor_.push_back(to_dph * spec.scaling.gyro_scale_of(a));
+  if (spec.despike) {
+    std::string why;
+    if (!spec.despike->IsValid(&why)) throw UsageError(why);
+    gyro_despikers_.assign(columns_.gyro.size(), Despiker(*spec.despike));
+    temperature_despikers_.assign(columns_.temperature.size(), Despiker(*spec.despike));
+    despiked_gyro_.assign(columns_.gyro.size(), 0);
+    despiked_temperature_.assign(columns_.temperature.size(), 0);
+  }
 }
 
 std::optional<CsvRow> LogSampleReader::next(LogSample& sample) {
   while (auto row = reader_.next()) {
     if (read(*row, sample)) {
       ++rows_;
+      // After the row is kept: a dropped row never enters a despiker's window.
+      bool replaced = false;
+      for (std::size_t a = 0; a < gyro_despikers_.size(); ++a) {
+        sample.gyro[a] = gyro_despikers_[a].push(sample.gyro[a], &replaced);
+        despiked_gyro_[a] += replaced;
+      }
+      for (std::size_t c = 0; c < temperature_despikers_.size(); ++c) {
+        sample.temperature[c] = temperature_despikers_[c].push(sample.temperature[c], &replaced);
+        despiked_temperature_[c] += replaced;
+      }
       return row;
     }
   }
@@ -312,6 +331,8 @@ ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec) {
   }
   reader.finish();
   log.time_origin = samples.time_origin();
+  log.despiked_gyro = samples.despiked_gyro();
+  log.despiked_temperature = samples.despiked_temperature();
   log.warnings = reader.warnings();
   return log;
 }

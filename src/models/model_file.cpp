@@ -31,6 +31,7 @@ LogSpec DriftModel::log_spec() const {
   spec.gyro_unit = gyro_unit;
   spec.time_unit = time_unit;
   spec.scaling = scaling;
+  spec.despike = despike;
   for (const auto& axis : axes) {
     spec.gyro_columns.push_back(axis.gyro_column);
     spec.temperature_columns.push_back(axis.temperature_column);
@@ -66,6 +67,11 @@ nlohmann::json to_json(const DriftModel& model) {
                        {"temperature_offset", model.scaling.temperature_offset},
                        {"gyro_scale", model.scaling.gyro_scale}};
   }
+  if (model.despike) {
+    json["despike"] = {{"window", model.despike->window},
+                       {"sigmas", model.despike->sigmas},
+                       {"replaced_in_training", {{"gyro", model.despiked_gyro}, {"temperature", model.despiked_temperature}}}};
+  }
   if (model.rate_hz) json["rate_hz"] = *model.rate_hz;
   if (!model.extra_temperature_columns.empty()) json["extra_temperature_columns"] = model.extra_temperature_columns;
   return json;
@@ -87,6 +93,23 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
     if (json.contains("time_column")) model.time_column = json.at("time_column").get<std::string>();
     if (json.contains("time_unit")) model.time_unit = parse_time_unit(json.at("time_unit").get<std::string>());
     if (json.contains("rate_hz")) model.rate_hz = json.at("rate_hz").get<double>();
+    if (json.contains("despike")) {
+      const auto& despike = json.at("despike");
+      if (!despike.is_object() || !despike.contains("window") || !despike.contains("sigmas")) {
+        throw fail("\"despike\" must hold \"window\" and \"sigmas\"");
+      }
+      DespikeOptions options;
+      options.window = json_integer<std::size_t>(despike.at("window"), "despike window");
+      if (!despike.at("sigmas").is_number()) throw fail("despike sigmas must be a number");
+      options.sigmas = despike.at("sigmas").get<double>();
+      std::string why;
+      if (!options.IsValid(&why)) throw fail(why);
+      model.despike = options;
+      if (despike.contains("replaced_in_training")) {
+        model.despiked_gyro = despike["replaced_in_training"].value("gyro", std::vector<std::size_t>{});
+        model.despiked_temperature = despike["replaced_in_training"].value("temperature", std::vector<std::size_t>{});
+      }
+    }
     if (json.contains("extra_temperature_columns")) {
       model.extra_temperature_columns = json.at("extra_temperature_columns").get<std::vector<std::string>>();
     }

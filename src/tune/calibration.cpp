@@ -375,6 +375,19 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
   calibration.model.gyro_unit = spec.gyro_unit;
   calibration.model.time_column = spec.time_column;
   calibration.model.time_unit = spec.time_unit;
+  calibration.model.despike = spec.despike;
+  if (spec.despike) {  // counts of the training logs: per axis' gyro, per temperature channel
+    calibration.model.despiked_gyro.assign(first.axes(), 0);
+    calibration.model.despiked_temperature.assign(first.temperature.size(), 0);
+    for (const auto& log : logs) {
+      for (std::size_t a = 0; a < log.despiked_gyro.size() && a < first.axes(); ++a) {
+        calibration.model.despiked_gyro[a] += log.despiked_gyro[a];
+      }
+      for (std::size_t c = 0; c < log.despiked_temperature.size() && c < first.temperature.size(); ++c) {
+        calibration.model.despiked_temperature[c] += log.despiked_temperature[c];
+      }
+    }
+  }
   calibration.model.rate_hz = spec.rate_hz;
   const auto channels = temperature_channel_per_axis(first);
 

@@ -37,18 +37,8 @@ const double kRadiansPerSecondInDegreesPerHour = 3600.0 * 180.0 / std::numbers::
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-std::vector<std::string> cells_of(const std::string& line) {
-  std::vector<std::string> cells;
-  std::stringstream row(line);
-  for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
-  return cells;
-}
-
-std::string join(const std::vector<std::string>& cells) {
-  std::string line;
-  for (std::size_t i = 0; i < cells.size(); ++i) line += (i ? "," : "") + cells[i];
-  return line;
-}
+using testing::cells_of;
+std::string join(const std::vector<std::string>& cells) { return testing::join_cells(cells); }
 
 // 2026-03-07T15:45:00Z plus `seconds`, written in one of four forms by row: Z with a
 // fraction, an offset with a colon, a space and no fraction nor zone, an offset without colon.

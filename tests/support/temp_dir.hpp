@@ -74,6 +74,20 @@ inline std::vector<std::string> split_lines(const std::string& text) {
   return lines;
 }
 
+// The comma-separated cells of one CSV line (no quoting), and back.
+inline std::vector<std::string> cells_of(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream row(line);
+  for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
+  return cells;
+}
+inline std::string join_cells(const std::vector<std::string>& cells) {
+  std::string line;
+  for (std::size_t i = 0; i < cells.size(); ++i) line += (i ? "," : "") + cells[i];
+  return line;
+}
+
 struct CommandResult {
   int status = -1;  // exit status, or -1 when the command did not exit normally
   std::string out;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "thermodrift/io/csv_reader.hpp"
+#include "thermodrift/io/despike.hpp"
 #include "thermodrift/io/time_stamp.hpp"
 
 namespace thermodrift {
@@ -48,6 +49,7 @@ struct LogSpec {
   std::vector<std::string> temperature_columns;   // empty: every header name starting "temp"
   GyroUnit gyro_unit = GyroUnit::dph;
   LogScaling scaling;                             // raw counts to °C and °/h
+  std::optional<DespikeOptions> despike;          // replace isolated outliers (off: nullopt)
   CsvOptions csv;                                 // tolerance for garbled rows
 };
 
@@ -96,6 +98,8 @@ struct ChamberLog {
   std::vector<std::size_t> line;                  // file line of each row
   std::vector<std::string> warnings;              // skipped banners, dropped cut-short rows
   std::optional<BurstSummary> bursts;             // set when each row is a burst's mean
+  // With LogSpec::despike: samples replaced per gyro axis and per temperature channel.
+  std::vector<std::size_t> despiked_gyro, despiked_temperature;
 
   std::size_t rows() const { return time.size(); }
   std::size_t axes() const { return gyro.size(); }
@@ -128,6 +132,9 @@ class LogSampleReader {
   const LogColumns& columns() const { return columns_; }
   const std::optional<TimeOrigin>& time_origin() const { return origin_; }
   std::size_t rows() const { return rows_; }  // rows kept so far
+  // With spec.despike: samples replaced so far per gyro column and per temperature column.
+  const std::vector<std::size_t>& despiked_gyro() const { return despiked_gyro_; }
+  const std::vector<std::size_t>& despiked_temperature() const { return despiked_temperature_; }
 
   // The next kept row, its cells read into `sample`; nothing at the end of the file.
   std::optional<CsvRow> next(LogSample& sample);
@@ -140,6 +147,8 @@ class LogSampleReader {
   LogSpec spec_;
   LogColumns columns_;
   std::vector<double> gyro_factor_;  // °/h per raw unit, per gyro column
+  std::vector<Despiker> gyro_despikers_, temperature_despikers_;
+  std::vector<std::size_t> despiked_gyro_, despiked_temperature_;
   std::optional<TimeOrigin> origin_;
   TimeStamp previous_;
   std::string previous_text_;

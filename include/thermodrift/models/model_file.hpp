@@ -44,6 +44,10 @@ struct DriftModel {
   // Raw values to °C and °/h as the training log was read: each list empty (default),
   // one value for all, or one per axis (gyro) / per temperature input (temperature).
   LogScaling scaling;
+  // The spike filter the training logs were read with (evaluate and compensate read with
+  // it too), and how many samples it replaced there: per axis' gyro, per temperature input.
+  std::optional<DespikeOptions> despike;
+  std::vector<std::size_t> despiked_gyro, despiked_temperature;
   std::optional<double> rate_hz;
   std::vector<AxisModel> axes;
   // Temperature columns after the axes' own, read only by grad terms (as named to the

@@ -165,6 +165,39 @@ TEST(ModelFile, TrainingEnvelopeRoundTripsAndIsOptional) {
   }
 }
 
+TEST(ModelFile, DespikeRoundTripsIntoTheLogSpecAndIsChecked) {
+  TempDir dir;
+  DriftModel model = two_axis_model();
+  EXPECT_FALSE(model.log_spec().despike);
+  model.despike = DespikeOptions{25, 5};
+  model.despiked_gyro = {3, 0};
+  model.despiked_temperature = {1};
+  const auto path = dir.file("model.json");
+  save_drift_model(model, path);
+  const DriftModel back = load_drift_model(path);
+  ASSERT_TRUE(back.log_spec().despike);
+  EXPECT_EQ(back.log_spec().despike->window, 25u);
+  EXPECT_EQ(back.log_spec().despike->sigmas, 5.0);
+  EXPECT_EQ(back.despiked_gyro, (std::vector<std::size_t>{3, 0}));
+  EXPECT_EQ(back.despiked_temperature, (std::vector<std::size_t>{1}));
+
+  const auto json = nlohmann::json::parse(testing::read_file(path));
+  const std::vector<std::pair<std::string, nlohmann::json>> bad = {
+      {"despike window must be an integer", {{"window", -1}}},
+      {"despike window must be 3 to 100000", {{"window", 2}}},
+      {"despike sigmas must be a number", {{"sigmas", "six"}}},
+      {"despike threshold must be a positive", {{"sigmas", 0}}},
+      {"must hold \"window\" and \"sigmas\"", {{"window", nullptr}}},
+  };
+  for (const auto& [what, patch] : bad) {
+    auto edited = json;
+    edited["despike"].merge_patch(patch);
+    dir.write("bad.json", edited.dump());
+    const DataError error = load_error(dir.file("bad.json"));
+    EXPECT_TRUE(contains(error.what(), what)) << error.what();
+  }
+}
+
 TEST(ModelFile, LogSpecReadsLikeTheTrainingLog) {
   const LogSpec spec = two_axis_model().log_spec();
   EXPECT_EQ(spec.gyro_columns, (std::vector<std::string>{"5", "6"}));
