@@ -349,6 +349,9 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       " * increase, restarts the warm-up. Ring buffers are sized for {rate} Hz: a device that\n"
       " * samples faster drops the oldest sample of a full ring, counts it in\n"
       " * state.dropped_samples and returns 0 for that step (never writes out of bounds).\n"
+      " * A sample with a non-finite time, gyro or temperature (a failed read) is rejected\n"
+      " * whole: step leaves the state as it was, writes NAN, counts it in\n"
+      " * state.rejected_samples and returns 0. An output that is not finite returns 0.\n"
       " *\n"
       " * Model size ({precision}):\n",
       fmt::arg("p", p), fmt::arg("source", options.source.empty() ? "" : " from " + comment_safe(options.source)),
@@ -418,6 +421,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  {p}_axis_state axis[{P}_AXES];\n"
       "  {p}_real drift[{P}_AXES];         /* last predicted drift per axis, deg/h */\n"
       "  unsigned long dropped_samples;   /* ring overflows: the device sampled faster than {P}_MAX_RATE_HZ */\n"
+      "  unsigned long rejected_samples;  /* samples with a non-finite input, rejected whole */\n"
       "}} {p}_state;\n\n"
       "typedef struct {{\n"
       "  double smooth_seconds;\n"
@@ -593,6 +597,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "    state->drift[a] = 0;\n"
       "  }}\n"
       "  state->dropped_samples = 0;\n"
+      "  state->rejected_samples = 0;\n"
       "}}\n\n"
       "/* Pushes one temperature into a channel; writes its mean and rate (degC/min).\n"
       " * Sets *dropped when a full ring had to lose its oldest sample. */\n"
@@ -777,6 +782,19 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
         "  {p}_real rate;\n",
         fmt::arg("p", p), fmt::arg("P", P));
   }
+  out += fmt::format(
+      "  {{\n"
+      "    int finite = isfinite(time);\n"
+      "    int k;\n"
+      "    for (k = 0; k < {P}_AXES; ++k) finite = finite && isfinite(gyro[k]);\n"
+      "    for (k = 0; k < {P}_TEMPERATURES; ++k) finite = finite && isfinite(temperature[k]);\n"
+      "    if (!finite) {{  /* a failed read: rejected whole, the state left as it was */\n"
+      "      for (k = 0; k < {P}_AXES; ++k) compensated[k] = NAN;\n"
+      "      ++state->rejected_samples;\n"
+      "      return 0;\n"
+      "    }}\n"
+      "  }}\n",
+      fmt::arg("P", P));
   for (std::size_t a = 0; a < axes; ++a) {
     const auto& terms = model.axes[a].pipeline.terms;
     // In float the pipeline runs on T - reference, rounded once from double: smaller
@@ -883,7 +901,8 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
     out += fmt::format(
         "    state->drift[{a}] = {p}_axis{a}_drift(features);\n"
         "  }}\n"
-        "  compensated[{a}] = gyro[{a}] - (double)state->drift[{a}];\n",
+        "  compensated[{a}] = gyro[{a}] - (double)state->drift[{a}];\n"
+        "  if (!isfinite(compensated[{a}])) ready = 0;  /* never a non-finite output flagged valid */\n",
         fmt::arg("p", p), fmt::arg("a", a));
   }
   out += fmt::format(

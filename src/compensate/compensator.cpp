@@ -1,5 +1,8 @@
 #include "thermodrift/compensate/compensator.hpp"
 
+#include <cmath>
+#include <limits>
+
 #include "thermodrift/error.hpp"
 
 namespace thermodrift {
@@ -26,18 +29,34 @@ void Compensator::reset() {
 
 const Compensator::Output& Compensator::push(double time, std::span<const double> gyro,
                                              std::span<const double> temperatures) {
+  // A sample with a non-finite input (a failed sensor read) is rejected whole: it would
+  // stay in the running sums and lag states for good. The state is left as it was.
+  bool finite = std::isfinite(time);
+  for (std::size_t a = 0; a < streams_.size(); ++a) finite = finite && std::isfinite(gyro[a]);
+  for (std::size_t c = 0; c < model_.temperature_inputs(); ++c) finite = finite && std::isfinite(temperatures[c]);
+  if (!finite) {
+    ++rejected_;
+    for (std::size_t a = 0; a < streams_.size(); ++a) {
+      drift_[a] = compensated_[a] = std::numeric_limits<double>::quiet_NaN();
+      status_[a].ready = false;
+      status_[a].outside_envelope = Excursion{};
+    }
+    output_.ready = false;
+    return output_;
+  }
   bool ready = true;
   for (std::size_t a = 0; a < streams_.size(); ++a) {
     const auto& sample = streams_[a].push(time, gyro[a], temperatures[a], temperatures);
     drift_[a] = model_.axes[a].predict(sample.features);
     compensated_[a] = gyro[a] - drift_[a];
     const auto& envelope = model_.axes[a].envelope;
-    status_[a].ready = sample.ready;
+    // Never a non-finite value flagged valid (absurd inputs can overflow the model).
+    status_[a].ready = sample.ready && std::isfinite(compensated_[a]);
     status_[a].since_start = sample.since_start;
     status_[a].outside_envelope = sample.ready && envelope
                                       ? envelope->check(sample.smoothed_temperature, sample.smoothed_rate)
                                       : Excursion{};
-    ready = ready && sample.ready;
+    ready = ready && status_[a].ready;
   }
   output_.ready = ready;
   return output_;
