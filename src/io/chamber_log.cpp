@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <numbers>
@@ -111,12 +112,35 @@ std::size_t find_column(const std::string& name, const CsvReader& reader, const 
                               fmt::join(reader.header(), ", ")));
 }
 
+std::string lower_case(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+// Header names starting with `prefix` (lower case), whatever their case: Gyro_X, TEMP1.
 std::vector<std::size_t> columns_with_prefix(const CsvReader& reader, std::string_view prefix) {
   std::vector<std::size_t> found;
   for (std::size_t i = 0; i < reader.header().size(); ++i) {
-    if (reader.header()[i].starts_with(prefix)) found.push_back(i);
+    if (lower_case(reader.header()[i]).starts_with(prefix)) found.push_back(i);
   }
   return found;
+}
+
+// The time column found by name: time_s, time or t first, else the first name (any case)
+// that is t or starts with "time" or "t_" (time_ms, timestamp, Time (s), t_us).
+std::optional<std::size_t> time_column_by_name(const CsvReader& reader) {
+  const auto& header = reader.header();
+  for (const char* name : {"time_s", "time", "t"}) {
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (header[i] == name) return i;
+    }
+  }
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    const std::string name = lower_case(header[i]);
+    if (name == "t" || name.starts_with("time") || name.starts_with("t_")) return i;
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -126,11 +150,7 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
   if (spec.time_column) {
     columns.time = find_column(*spec.time_column, reader, "time");
   } else if (!spec.rate_hz) {
-    for (const char* name : {"time_s", "time", "t"}) {
-      for (std::size_t i = 0; i < reader.header().size(); ++i) {
-        if (!columns.time && reader.header()[i] == name) columns.time = i;
-      }
-    }
+    columns.time = time_column_by_name(reader);
     if (!columns.time) {
       throw UsageError(fmt::format("{}: no time column found; name one with --time or give the "
                                    "sampling rate with --rate",

@@ -66,9 +66,9 @@ double slope(const std::vector<double>& x, const std::vector<double>& y, std::si
   return sxy / sxx;
 }
 
+// The command: columns found by name (time_ms, temp_raw, gyro_radps).
 const std::string kRawOptions =
-    "--time time_ms --time-unit ms --gyro gyro_radps --temp temp_raw --gyro-unit radps --gyro-scale 0.5 "
-    "--temp-scale 0.00390625 --temp-offset -231";
+    "--time-unit ms --gyro-unit radps --gyro-scale 0.5 --temp-scale 0.00390625 --temp-offset -231";
 
 TEST(BurstLog, FitsFromTheRawFileWithTheSlopeOfTheBurstMeans) {
   TempDir dir;

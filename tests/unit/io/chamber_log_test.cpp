@@ -87,6 +87,24 @@ TEST(ChamberLog, ColumnsByIndexWithHeaderAndDefaultsByPrefix) {
   EXPECT_EQ(defaults.time, (std::vector<double>{0, 1}));
 }
 
+// A bench logger's header: time_ms, Temp_raw, Gyro_X... — found by name in any case; the
+// time column's unit is still --time-unit's.
+TEST(ChamberLog, BenchHeadersAreFoundInAnyCase) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "Index,Time_ms,Temp_raw,Gyro_X,Gyro_Y\n7,1000,5,3,4\n8,1500,5,3,4\n");
+  LogSpec spec;
+  spec.time_unit = TimeUnit::ms;
+  const ChamberLog log = read_chamber_log(path, spec);
+  EXPECT_EQ(log.time, (std::vector<double>{0, 0.5}));
+  EXPECT_EQ(log.gyro_names, (std::vector<std::string>{"Gyro_X", "Gyro_Y"}));
+  EXPECT_EQ(log.temperature_names, (std::vector<std::string>{"Temp_raw"}));
+  // An exact time_s, time or t comes before a time* name; "temperature" is no time column.
+  const auto both = dir.write("both.csv", "timestamp,temperature,t,gyro\n9,1,0,2\n9,1,1,2\n");
+  EXPECT_EQ(read_chamber_log(both, LogSpec{}).time, (std::vector<double>{0, 1}));
+  const auto none = dir.write("none.csv", "temperature,gyro\n1,2\n1,2\n");
+  EXPECT_THROW(read_chamber_log(none, LogSpec{}), UsageError);
+}
+
 // Found by prefix, three temp* columns for two axes cannot be paired by file order (the
 // first might be the chamber air): a usage error naming them. Named with --temp, the
 // columns after one per axis load as extra channels.
