@@ -1,4 +1,5 @@
 #include "data_options.hpp"
+#include "numbers.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -37,7 +38,7 @@ void DataOptions::add_to(CLI::App& app) {
       ->check(CLI::IsMember({"csv", "libsvm"}));
   app.add_option("--time", time, "time column (in --time-unit, or ISO 8601 stamps), header name or 1-based index");
   app.add_option("--rate", rate, "sampling rate in Hz when there is no time column")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   app.add_option("--gyro", gyro, "gyro column(s), one model per axis")->delimiter(',');
   app.add_option("--temp", temperature, "temperature column(s): one for all axes or one per axis, then any extra channels grad:A-B terms read")
       ->delimiter(',');
@@ -57,7 +58,7 @@ void DataOptions::add_to(CLI::App& app) {
                  "multiplies the gyro columns after --gyro-unit; one for all or one per gyro column (default 1)")
       ->delimiter(',');
   app.add_option("--smooth", smooth, "moving-average window in seconds (default 100)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   app.add_flag("--despike", despike,
                "replace isolated outliers of every gyro and temperature column (a causal Hampel filter: more than "
                "6 robust sigmas from the median of the 30 samples before); off by default; the model keeps it");

@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "data_options.hpp"
 #include "report_command.hpp"
+#include "numbers.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/report/report.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
@@ -99,7 +100,7 @@ Command add_demo(CLI::App& parent) {
   app->add_option("--seed", args->seed, "simulator seed");
   app->add_option("--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
   add_identify_option(*app, args->identify);
-  app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(CLI::PositiveNumber);
+  app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(kPositive);
   return {app, [args] { return run_demo(*args); }};
 }
 

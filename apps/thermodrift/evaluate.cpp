@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "data_options.hpp"
 #include "output.hpp"
+#include "numbers.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/tune/calibration.hpp"
 
@@ -98,7 +99,7 @@ Command add_evaluate(CLI::App& parent) {
   args->data.add_to(*app);
   app->add_option("--settle", args->settle,
                   "leave the first SECONDS of each log (and after each gap) out of the metrics, while lags settle")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   app->add_flag("--json", args->json, "print one JSON object on stdout");
   return {app, [args] { return run_evaluate(*args); }};
 }

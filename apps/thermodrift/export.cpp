@@ -8,6 +8,7 @@
 
 #include "commands.hpp"
 #include "data_options.hpp"
+#include "numbers.hpp"
 #include "thermodrift/compensate/c_export.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
@@ -60,7 +61,7 @@ Command add_export(CLI::App& parent) {
   app->add_flag("--float", args->single_precision, "single precision constants and arithmetic (expf)");
   app->add_option("--max-rate", args->max_rate_hz,
                   "highest sample rate (Hz) the ring buffers must hold; default: the model's rate, else 100")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   app->add_option("--prefix", args->prefix, "prefix of the C identifiers (default thermodrift)");
   return {app, [args] { return run_export(*args); }};
 }

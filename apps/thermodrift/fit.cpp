@@ -10,6 +10,7 @@
 #include "interrupt.hpp"
 #include "output.hpp"
 #include "progress.hpp"
+#include "numbers.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/tune/calibration.hpp"
 
@@ -172,16 +173,16 @@ Command add_fit(CLI::App& parent) {
   args->data.add_to(*app);
   app->add_option("--model", args->model, "linear, stepwise or svr")
       ->check(CLI::IsMember({"linear", "stepwise", "svr"}));
-  app->add_option("--C", args->C, "SVR penalty C")->check(CLI::PositiveNumber);
-  app->add_option("--sigma", args->sigma, "RBF width σ, on standardized features")->check(CLI::PositiveNumber);
-  app->add_option("--gamma", args->gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(CLI::PositiveNumber);
+  app->add_option("--C", args->C, "SVR penalty C")->check(kPositive);
+  app->add_option("--sigma", args->sigma, "RBF width σ, on standardized features")->check(kPositive);
+  app->add_option("--gamma", args->gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(kPositive);
   app->add_option("--epsilon", args->epsilon, "SVR tube half-width, standardized target units (libsvm -p)")
-      ->check(CLI::NonNegativeNumber);
-  app->add_option("--tol", args->tolerance, "SVR stopping tolerance (libsvm -e)")->check(CLI::PositiveNumber);
+      ->check(kNonNegative);
+  app->add_option("--tol", args->tolerance, "SVR stopping tolerance (libsvm -e)")->check(kPositive);
   app->add_option("--rate-span", args->rate_span, "span of the dT/dt difference in seconds (default: --smooth)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   app->add_option("--features", args->features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md")->delimiter(',');
   add_identify_option(*app, args->identify);
   app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
@@ -189,7 +190,7 @@ Command add_fit(CLI::App& parent) {
   app->add_option("--objective", args->objective,
                   "tuning objective: cv (blocked k-fold, default), holdout (last 30 %), train (in-sample, optimistic)")
       ->check(CLI::IsMember({"cv", "holdout", "train"}));
-  app->add_option("--evaluations", args->evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(CLI::PositiveNumber);
+  app->add_option("--evaluations", args->evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(kPositive);
   app->add_option("--folds", args->folds, "folds of the blocked cross-validation (default 5)")->check(CLI::Range(2, 100));
   app->add_option("--folds-by", args->folds_by,
                   "cross-validation folds of tuning and --features auto: time (default; --folds blocks in time, "
@@ -199,7 +200,7 @@ Command add_fit(CLI::App& parent) {
   app->add_flag("--tune-epsilon", args->tune_epsilon, "tune ε as well");
   app->add_option("--seed", args->seed, "seed of the tuner's random choices");
   app->add_option("--threads", args->threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   app->add_option("--out", args->out, "model file to write")->required();
   app->add_flag("--json", args->json, "print one JSON object on stdout");
   return {app, [args, app] { return run_fit(*args, *app); }};

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "numbers.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/sim/law_family.hpp"
@@ -52,14 +53,14 @@ Command add_simulate(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand("simulate", "simulate a 3-axis FOG chamber test with known true drift");
   app->add_option("--out", args->out, "CSV file to write")->required();
   app->add_option("--seed", args->options.seed, "seed of every noise stream");
-  app->add_option("--cycles", args->options.cycles, "number of chamber cycles")->check(CLI::PositiveNumber);
-  app->add_option("--rate", args->options.rate_hz, "sample rate in Hz")->check(CLI::PositiveNumber);
+  app->add_option("--cycles", args->options.cycles, "number of chamber cycles")->check(kPositive);
+  app->add_option("--rate", args->options.rate_hz, "sample rate in Hz")->check(kPositive);
   app->add_option("--min-temp", args->options.chamber_min_c, "cold extreme of the chamber, °C");
   app->add_option("--max-temp", args->options.chamber_max_c, "hot extreme of the chamber, °C");
   app->add_option("--ramp", args->options.ramp_rate_c_per_min, "chamber ramp rate, °C/min")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   app->add_option("--soak", args->options.extreme_soak_min, "soak at each extreme, minutes")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   app->add_option("--law", args->law,
                   "draw the unit from the law family with this seed (thermal network, drift law, noise; "
                   "docs/simulator.md) instead of the default unit");
