@@ -57,8 +57,8 @@ void DataOptions::add_to(CLI::App& app) {
   app.add_option("--gyro-scale", gyro_scale,
                  "multiplies the gyro columns after --gyro-unit; one for all or one per gyro column (default 1)")
       ->delimiter(',');
-  app.add_option("--smooth", smooth, "moving-average window in seconds (default 100)")
-      ->check(kNonNegative);
+  smooth_option = app.add_option("--smooth", smooth, "moving-average window in seconds (default 100)")
+                      ->check(kNonNegative);
   app.add_flag("--despike", despike,
                "replace isolated outliers of every gyro and temperature column (a causal Hampel filter: more than "
                "6 robust sigmas from the median of the 30 samples before); off by default; the model keeps it");
@@ -78,7 +78,19 @@ LogSpec DataOptions::spec() const {
   return spec;
 }
 
+void DataOptions::check_smoothing(const DriftModel& model) const {
+  if (smooth_option == nullptr || smooth_option->count() == 0) return;
+  for (const auto& axis : model.axes) {
+    if (axis.pipeline.smooth_seconds != smooth) {
+      throw UsageError(fmt::format("--smooth {:g}: the model was fitted with a {:g} s window and is applied with "
+                                   "it; fit again to change it",
+                                   smooth, axis.pipeline.smooth_seconds));
+    }
+  }
+}
+
 LogSpec DataOptions::spec_for(const DriftModel& model) const {
+  check_smoothing(model);
   LogSpec spec = model.log_spec();
   if (!time.empty()) {
     spec.time_column = time;

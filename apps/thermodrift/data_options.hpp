@@ -28,6 +28,7 @@ struct DataOptions {
   std::vector<double> gyro_scale;
   double smooth = 100;
   bool despike = false;  // --despike: the causal Hampel filter (io/despike.hpp)
+  const CLI::Option* smooth_option = nullptr;  // set by add_to
 
   // Declares --data, --format, --time, --rate, --gyro, --temp, --gyro-unit, --time-unit,
   // --temp-scale, --temp-offset, --gyro-scale, --smooth.
@@ -38,8 +39,11 @@ struct DataOptions {
   // The model's LogSpec (its columns, units and scaling, as fit read the training log),
   // with any of those options given on the command line taking over: the log at hand
   // may be named or recorded differently; the model itself works in °C, °/h and s.
+  // UsageError for a --smooth other than the model's (check_smoothing).
   LogSpec spec_for(const DriftModel& model) const;
-  bool smooth_given(const CLI::App& app) const { return app.count("--smooth") > 0; }
+  // A --smooth that differs from the model's window is a UsageError (spec_for checks it:
+  // evaluate and compensate smooth as the model was fitted, never silently otherwise).
+  void check_smoothing(const DriftModel& model) const;
   // The warm-up of a pipeline with --smooth and `rate_span` (0: the default, the smoothing
   // window, at least 1 s), as calibrate builds it.
   double warm_up_seconds(double rate_span = 0) const {

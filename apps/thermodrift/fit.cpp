@@ -84,8 +84,12 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       if (!tuning.IsValid(&why)) throw UsageError(why);
       options.tuning = tuning;
     }
-  } else if (!args.tune.empty()) {
-    throw UsageError("--tune applies to --model svr");
+  } else {
+    // Never silently ignored: the SVR's and its tuning's options with another model.
+    for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
+                               "--evaluations", "--folds", "--tune-epsilon"}) {
+      if (app.count(option)) throw UsageError(fmt::format("{} applies to --model svr, not {}", option, args.model));
+    }
   }
   ProgressPrinter progress("thermodrift fit");
   std::size_t axis_count = 1;

@@ -1,0 +1,61 @@
+// Options are checked, never silently ignored. Numeric options refuse NaN, infinities and
+// trailing junk with one line saying what is expected and exit status 2 (CLI11's own
+// checks let NaN through: `--rate nan` was taken as "not given", and an out-of-range value
+// printed DBL_MAX in 309 digits).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "../support/temp_dir.hpp"
+
+namespace thermodrift::testing {
+namespace {
+
+TEST(OptionChecks, NanInfinityAndJunkAreUsageErrors) {
+  TempDir dir;
+  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
+  const std::string fit = "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json ";
+  for (const std::string option : {"--rate nan", "--rate inf", "--rate 1x", "--smooth nan", "--smooth -inf",
+                                   "--rate-span nan", "--C nan", "--sigma inf", "--epsilon nan", "--evaluations 0"}) {
+    SCOPED_TRACE(option);
+    const auto result = run_thermodrift(dir, fit + option);
+    EXPECT_EQ(result.status, 2);
+    const std::string flag = option.substr(0, option.find(' '));
+    EXPECT_NE(result.err.find(flag + ": expected a finite number"), std::string::npos) << result.err;
+    EXPECT_LT(result.err.size(), 200u) << result.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
+  }
+  ASSERT_EQ(run_thermodrift(dir, fit).status, 0);
+  const auto settle = run_thermodrift(dir, "evaluate --model m.json --data log.csv --settle nan");
+  EXPECT_EQ(settle.status, 2);
+  EXPECT_NE(settle.err.find("--settle: expected a finite number of 0 or more, not 'nan'"), std::string::npos)
+      << settle.err;
+}
+
+// Options that cannot apply are refused, not silently ignored: the SVR's with another
+// model, a smoothing window other than the model's when applying it.
+TEST(OptionChecks, OptionsThatCannotApplyAreUsageErrors) {
+  TempDir dir;
+  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
+  for (const std::string option : {"--C 10", "--sigma 1", "--epsilon 0.1", "--folds 3", "--evaluations 9"}) {
+    SCOPED_TRACE(option);
+    const auto result = run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json " + option);
+    EXPECT_EQ(result.status, 2);
+    EXPECT_NE(result.err.find(option.substr(0, option.find(' ')) + " applies to --model svr, not linear"),
+              std::string::npos)
+        << result.err;
+  }
+  ASSERT_EQ(run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --smooth 50 --out m.json").status, 0);
+  for (const char* command : {"evaluate --model m.json --data log.csv", "compensate --model m.json --data log.csv --out c.csv"}) {
+    SCOPED_TRACE(command);
+    const auto other = run_thermodrift(dir, std::string(command) + " --smooth 100");
+    EXPECT_EQ(other.status, 2);
+    EXPECT_NE(other.err.find("the model was fitted with a 50 s window"), std::string::npos) << other.err;
+    EXPECT_EQ(run_thermodrift(dir, std::string(command) + " --smooth 50").status, 0);  // the model's: fine
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("c.csv.tmp")));
+}
+
+}  // namespace
+}  // namespace thermodrift::testing
