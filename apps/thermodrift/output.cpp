@@ -74,9 +74,12 @@ void print_axes(const nlohmann::json& result, bool as_json, const std::string& t
       if (expected.contains("x_floor_estimate")) {
         ratio = fmt::format(" = {:.3g} × the floor estimate", expected["x_floor_estimate"].get<double>());
       }
-      fmt::print("{} expected held-out MSE: {:.4g} (°/h)²{} (from {}; within this log's kind of programme — "
-                 "another programme can be worse)\n",
-                 name, expected["cv_mse"].get<double>(), ratio, expected["from"].get<std::string>());
+      const auto from = expected["from"].get<std::string>();
+      fmt::print("{} expected held-out MSE: {:.4g} (°/h)²{} (from {}; {})\n", name, expected["cv_mse"].get<double>(),
+                 ratio, from,
+                 from.find("leave-one-run-out") != std::string::npos
+                     ? "each run predicted by a model of the others"
+                     : "within this log's kind of programme — another programme can be worse");
     }
     if (axis.contains("outside_envelope")) {
       fmt::print("{} outside the training envelope: {} of {} samples ({:.1f} %)\n", name,
