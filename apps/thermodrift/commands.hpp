@@ -25,6 +25,7 @@ Command add_compensate(CLI::App& parent);
 Command add_demo(CLI::App& parent);
 Command add_report(CLI::App& parent);
 Command add_export(CLI::App& parent);
+Command add_compress(CLI::App& parent);
 
 std::vector<Command> register_commands(CLI::App& app);
 int run_selected(const std::vector<Command>& commands);

@@ -30,9 +30,9 @@ void note_despiked(const std::string& file, const std::vector<std::string>& gyro
                total == 1 ? "" : "s", fmt::format("{}", fmt::join(parts, ", ")).c_str());
 }
 
-void DataOptions::add_to(CLI::App& app) {
+void DataOptions::add_to(CLI::App& app, bool data_required) {
   app.add_option("--data", files, "the log(s): CSV, header row or not; several are fitted together")
-      ->required()
+      ->required(data_required)
       ->check(CLI::ExistingFile);
   app.add_option("--format", format, "csv (default) or libsvm")
       ->check(CLI::IsMember({"csv", "libsvm"}));

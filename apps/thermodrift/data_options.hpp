@@ -31,8 +31,8 @@ struct DataOptions {
   const CLI::Option* smooth_option = nullptr;  // set by add_to
 
   // Declares --data, --format, --time, --rate, --gyro, --temp, --gyro-unit, --time-unit,
-  // --temp-scale, --temp-offset, --gyro-scale, --smooth.
-  void add_to(CLI::App& app);
+  // --temp-scale, --temp-offset, --gyro-scale, --smooth; --data required unless told.
+  void add_to(CLI::App& app, bool data_required = true);
 
   // The LogSpec the options name. UsageError for a zero or non-finite scale.
   LogSpec spec() const;

@@ -38,6 +38,7 @@ struct FitArguments {
   int folds = 5;
   std::string folds_by = "time";
   bool tune_epsilon = false;
+  std::size_t max_vectors = 0;
   std::string out;
   bool json = false;
 };
@@ -67,6 +68,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     }
     options.svr.epsilon = args.epsilon;
     options.svr.tolerance = args.tolerance;
+    if (app.count("--max-vectors")) options.max_vectors = args.max_vectors;
     // The paper's method tunes C and σ; fixed values are used only when both are given.
     const bool fixed = app.count("--C") && (app.count("--sigma") || app.count("--gamma"));
     if (!args.tune.empty() || !fixed) {
@@ -87,7 +89,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   } else {
     // Never silently ignored: the SVR's and its tuning's options with another model.
     for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
-                               "--evaluations", "--folds", "--tune-epsilon"}) {
+                               "--evaluations", "--folds", "--tune-epsilon", "--max-vectors"}) {
       if (app.count(option)) throw UsageError(fmt::format("{} applies to --model svr, not {}", option, args.model));
     }
   }
@@ -139,6 +141,11 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
     }
     add_expected_held_out(entry, axis.fit);
+    if (axis.fit.contains("compressed")) {
+      const auto& compressed = axis.fit["compressed"];
+      entry["compressed"] = compressed;
+      if (!args.json) print_compression(axis.name, compressed, "training_mse", "on the fitted samples, in-sample");
+    }
     axes.push_back(entry);
   }
   result["axes"] = axes;
@@ -202,6 +209,9 @@ Command add_fit(CLI::App& parent) {
                   "file: leave-one-run-out)")
       ->check(CLI::IsMember({"runs", "time"}));
   app->add_flag("--tune-epsilon", args->tune_epsilon, "tune ε as well");
+  app->add_option("--max-vectors", args->max_vectors,
+                  "at most K support vectors per axis: the reduced set fitted to the SVR (as compress does)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20));
   app->add_option("--seed", args->seed, "seed of the tuner's random choices");
   app->add_option("--threads", args->threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")
       ->check(kPositive);

@@ -9,6 +9,21 @@
 
 namespace thermodrift::cli {
 
+void print_compression(const std::string& axis, const nlohmann::json& compressed, const std::string& mse_key,
+                       const std::string& measured_on) {
+  std::string mse;
+  if (compressed.contains(mse_key + "_before")) {
+    const double before = compressed[mse_key + "_before"].get<double>();
+    const double after = compressed[mse_key + "_after"].get<double>();
+    mse = fmt::format("; MSE {:.6g} -> {:.6g} (deg/h)^2 ({:+.2f} %) {}", before, after,
+                      before > 0 ? 100.0 * (after - before) / before : 0.0, measured_on);
+  }
+  fmt::print("{}: {} support vectors -> {}; prediction changed by {:.3g} deg/h RMS ({:.3g} at most) at {} points{}\n",
+             axis, compressed["from_vectors"].get<std::size_t>(), compressed["to_vectors"].get<std::size_t>(),
+             compressed["rms_change"].get<double>(), compressed["max_change"].get<double>(),
+             compressed["points"].get<std::size_t>(), mse);
+}
+
 void add_expected_held_out(nlohmann::json& axis, const nlohmann::json& fit) {
   const auto estimate = expected_held_out(fit);
   if (!estimate) return;

@@ -20,6 +20,13 @@ void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor);
 // noise-floor estimate when add_noise_floor set one. Nothing when the fit had no CV.
 void add_expected_held_out(nlohmann::json& axis, const nlohmann::json& fit);
 
+// One line on stdout for an axis' compression record (fit.compressed, SvrModel's
+// compress): support vectors before and after, the prediction's change, and the MSE
+// figures `mse_key`_before / `mse_key`_after when the record has them, `measured_on` saying
+// on what.
+void print_compression(const std::string& axis, const nlohmann::json& compressed, const std::string& mse_key,
+                       const std::string& measured_on);
+
 // `result` holds an "axes" array (see above); the table also shows, where an axis has
 // them, its training envelope, noise-floor estimate and samples outside the envelope.
 void print_axes(const nlohmann::json& result, bool as_json, const std::string& title);

@@ -301,6 +301,21 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     const SvrTrainer trainer(solver);
     const SvrFit result = trainer.train(scaled_features, scaled_target);
     svr.function = result.function;
+    if (options.max_vectors && static_cast<std::size_t>(svr.function.support_vectors.rows()) > *options.max_vectors) {
+      const auto in_sample_mse = [&] {
+        const double scale = svr.scaling.target_scale;
+        return (scaled_target - svr.function.predict(scaled_features)).squaredNorm() /
+               static_cast<double>(scaled_target.size()) * scale * scale;
+      };
+      const double before = in_sample_mse();
+      ReduceOptions reduce;
+      reduce.max_vectors = *options.max_vectors;
+      nlohmann::json record = compress(svr, scaled_features, reduce);
+      record["training_mse_before"] = before;
+      record["training_mse_after"] = in_sample_mse();
+      record["training_mse_unit"] = "(deg/h)^2";
+      fitted.fit["compressed"] = std::move(record);
+    }
     svr.C = solver.C;
     svr.epsilon = solver.epsilon;
     svr.converged = result.summary.termination == SvrTermination::converged;

@@ -14,6 +14,7 @@
 
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/svr.hpp"
+#include "thermodrift/models/svr_reduce.hpp"
 
 namespace thermodrift {
 
@@ -50,5 +51,11 @@ struct SvrModel {
   // Throws Error when sizes disagree with `term_names` or a number is not finite.
   static SvrModel from_json(const nlohmann::json& json, const std::vector<std::string>& term_names);
 };
+
+// Replaces the model's decision function by its reduced set (models/svr_reduce.hpp) fitted
+// at `scaled_points` (standardized features, one sample per row) and returns what is stored
+// under the axis' fit.compressed: vectors before and after, and the change of the prediction
+// at those points in the target's units (°/h). A model within the budget is left as it is.
+nlohmann::json compress(SvrModel& model, const Eigen::MatrixXd& scaled_points, const ReduceOptions& options);
 
 }  // namespace thermodrift

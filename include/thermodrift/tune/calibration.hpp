@@ -27,6 +27,9 @@ struct CalibrationOptions {
   std::vector<std::string> terms{"dT", "rate"};  // feature terms (the paper's pair); {"auto"}: chosen per axis
   SvrOptions svr;                          // C, gamma, epsilon, tolerance for --model svr (standardized units)
   std::optional<SvrTuningOptions> tuning;  // tune C, σ (and ε) per axis instead of using `svr`'s
+  // --model svr: at most this many support vectors per axis, by the reduced set fitted at
+  // the training samples (models/svr_reduce.hpp); the record is fit.compressed.
+  std::optional<std::size_t> max_vectors;
   // Progress of the tuning of axis `axis` (0-based); returning false stops the run.
   std::function<bool(std::size_t axis, const optim::Progress&)> tuning_progress;
   // With terms {"auto"}: the least-squares selections per axis when already made (a study
