@@ -140,6 +140,27 @@ __attribute__((always_inline)) inline Lanes negative_exp_lanes(Lanes squared, La
   return x < broadcast(-708.0) ? broadcast(0.0) : result;
 }
 
+// Σ_f (columns[f][k + i] - center[f])² in lane i; only lanes i < rest (≤ 4) are read, the
+// others are padded with the centre (distance 0).
+__attribute__((always_inline)) inline Lanes squared_distance_lanes(const double* const* columns,
+                                                                   std::size_t feature_count, const double* center,
+                                                                   std::size_t k, std::size_t rest = simd::kLanes) {
+  Lanes sum = broadcast(0.0);
+  for (std::size_t f = 0; f < feature_count; ++f) {
+    Lanes values;
+    if (rest == simd::kLanes) {
+      values = simd::load(columns[f] + k);
+    } else {
+      double padded[simd::kLanes] = {center[f], center[f], center[f], center[f]};
+      std::memcpy(padded, columns[f] + k, rest * sizeof(double));
+      values = simd::load(padded);
+    }
+    const Lanes difference = values - center[f];
+    sum += difference * difference;
+  }
+  return sum;
+}
+
 // out[p] = exp(-gamma Σ_f (features[f][p] - center[f])²), p in [0, count). Lane-wise, so
 // an entry's value does not depend on where in a range it sits (a column may be
 // computed in pieces): the tail is padded to a whole vector.
@@ -147,28 +168,13 @@ THERMODRIFT_SIMD_CLONES
 void rbf_entries(const double* const* features, std::size_t feature_count, const double* center, double gamma,
                  std::size_t count, double* out) {
   const Lanes factor = broadcast(-gamma);
-  auto squared_distance = [&](std::size_t p) {
-    Lanes sum = broadcast(0.0);
-    for (std::size_t f = 0; f < feature_count; ++f) {
-      const Lanes difference = simd::load(features[f] + p) - center[f];
-      sum += difference * difference;
-    }
-    return sum;
-  };
   std::size_t p = 0;
   for (; p + simd::kLanes <= count; p += simd::kLanes)
-    simd::store(out + p, negative_exp_lanes(squared_distance(p), factor));
+    simd::store(out + p, negative_exp_lanes(squared_distance_lanes(features, feature_count, center, p), factor));
   if (p < count) {
     const std::size_t rest = count - p;
-    Lanes sum = broadcast(0.0);
-    for (std::size_t f = 0; f < feature_count; ++f) {
-      double padded[simd::kLanes] = {center[f], center[f], center[f], center[f]};
-      std::memcpy(padded, features[f] + p, rest * sizeof(double));
-      const Lanes difference = simd::load(padded) - center[f];
-      sum += difference * difference;
-    }
     double tail[simd::kLanes];
-    simd::store(tail, negative_exp_lanes(sum, factor));
+    simd::store(tail, negative_exp_lanes(squared_distance_lanes(features, feature_count, center, p, rest), factor));
     std::memcpy(out + p, tail, rest * sizeof(double));
   }
 }
@@ -189,6 +195,40 @@ void negative_exp(double* values, std::size_t count, double gamma) {
 }
 
 }  // namespace
+
+THERMODRIFT_SIMD_CLONES
+double rbf_sum(const double* const* columns, std::size_t feature_count, const double* x, double gamma,
+               const double* coefficients, std::size_t count) {
+  const Lanes factor = broadcast(-gamma);
+  Lanes sum = broadcast(0.0);
+  std::size_t k = 0;
+  // Two vectors of lanes per step: their exp polynomials are independent chains.
+  Lanes other_sum = broadcast(0.0);
+  for (; k + 2 * simd::kLanes <= count; k += 2 * simd::kLanes) {
+    Lanes squared = broadcast(0.0), other_squared = broadcast(0.0);
+    for (std::size_t f = 0; f < feature_count; ++f) {
+      const Lanes difference = simd::load(columns[f] + k) - x[f];
+      const Lanes other_difference = simd::load(columns[f] + k + simd::kLanes) - x[f];
+      squared += difference * difference;
+      other_squared += other_difference * other_difference;
+    }
+    sum += simd::load(coefficients + k) * negative_exp_lanes(squared, factor);
+    other_sum += simd::load(coefficients + k + simd::kLanes) * negative_exp_lanes(other_squared, factor);
+  }
+  sum += other_sum;
+  for (; k + simd::kLanes <= count; k += simd::kLanes) {
+    sum += simd::load(coefficients + k) * negative_exp_lanes(squared_distance_lanes(columns, feature_count, x, k), factor);
+  }
+  if (k < count) {  // the last vectors padded with zero coefficients
+    const std::size_t rest = count - k;
+    double weights[simd::kLanes] = {0, 0, 0, 0};
+    std::memcpy(weights, coefficients + k, rest * sizeof(double));
+    sum += simd::load(weights) * negative_exp_lanes(squared_distance_lanes(columns, feature_count, x, k, rest), factor);
+  }
+  double lanes[simd::kLanes];
+  simd::store(lanes, sum);
+  return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+}
 
 // Positions [begin, end) of one column, from the samples (feature-major, position
 // order) or from the stored squared distances.

@@ -43,6 +43,13 @@ class WorkerPool {
   bool stopping_ = false;
 };
 
+// Σ_k coefficients[k]·exp(-gamma ||v_k - x||²) over `count` vectors stored feature-major
+// (columns[f][k], as a column-major Eigen matrix holds them): the RBF sum of a decision
+// function, four vectors at a time with the solver's lane-wise exp (≤ 2.3e-16 relative to
+// libm's), the products summed in four lanes, then the lanes.
+double rbf_sum(const double* const* columns, std::size_t feature_count, const double* x, double gamma,
+               const double* coefficients, std::size_t count);
+
 // K(a, b) = exp(-gamma ||x_a - x_b||²) over the samples of a data set, addressed by
 // *position*: the solver keeps its active samples at positions [0, active) (as libsvm's
 // swap_index) so that its per-step loops run over plain arrays. The kernel keeps the

@@ -41,18 +41,19 @@ const char* to_string(SvrTermination termination) {
 }
 
 double RbfDecisionFunction::operator()(const double* x) const {
-  const Eigen::Index count = support_vectors.rows();
-  const Eigen::Index features = support_vectors.cols();
-  double sum = bias;
-  for (Eigen::Index k = 0; k < count; ++k) {
-    double squared = 0;
-    for (Eigen::Index feature = 0; feature < features; ++feature) {
-      const double difference = support_vectors(k, feature) - x[feature];
-      squared += difference * difference;
-    }
-    sum += coefficients(k) * std::exp(-gamma * squared);
+  const auto features = static_cast<std::size_t>(support_vectors.cols());
+  constexpr std::size_t kFewFeatures = 32;
+  const double* columns[kFewFeatures];
+  std::vector<const double*> many;
+  const double** column = columns;
+  if (features > kFewFeatures) {
+    many.resize(features);
+    column = many.data();
   }
-  return sum;
+  // Column-major: each feature's values of all vectors are contiguous.
+  for (std::size_t f = 0; f < features; ++f) column[f] = support_vectors.col(static_cast<Eigen::Index>(f)).data();
+  return bias + svr_detail::rbf_sum(column, features, x, gamma, coefficients.data(),
+                                    static_cast<std::size_t>(support_vectors.rows()));
 }
 
 Eigen::VectorXd RbfDecisionFunction::predict(const Eigen::MatrixXd& samples) const {
