@@ -35,11 +35,13 @@ std::string shell_quote(const std::string& text) {
   return out + "'";
 }
 
-// gnuplot's enhanced text treats _ ^ @ & { } as markup.
+// gnuplot's enhanced text treats _ ^ @ & { } as markup; in a single-quoted string one
+// backslash escapes it (two print a backslash and leave the markup: "gyro\" and a
+// subscript x).
 std::string label(const std::string& text) {
   std::string out;
   for (char c : text) {
-    if (c == '_' || c == '^' || c == '@' || c == '&' || c == '{' || c == '}') out += "\\\\";
+    if (c == '_' || c == '^' || c == '@' || c == '&' || c == '{' || c == '}') out += '\\';
     out += c;
   }
   return quote(out);

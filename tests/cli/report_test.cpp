@@ -120,8 +120,12 @@ void every_referenced_figure_exists_and_is_svg_with_data(const TempDir* dir_, co
   for (const auto& file : referenced) {
     const std::string path = dir_->file("out/" + file);
     ASSERT_TRUE(std::filesystem::exists(path)) << file;
-    EXPECT_TRUE(valid_svg_with_data(testing::read_file(path))) << file;
+    const std::string svg = testing::read_file(path);
+    EXPECT_TRUE(valid_svg_with_data(svg)) << file;
+    // Labels escaped for gnuplot's enhanced text show the column names as they are.
+    EXPECT_EQ(svg.find("gyro\\"), std::string::npos) << file << ": a label shows an escaping backslash";
   }
+  EXPECT_NE(testing::read_file(dir_->file("out/raw.svg")).find(">gyro_x<"), std::string::npos) << "raw.svg legend";
   // Inline too: the page opens from disk without its folder.
   std::size_t inline_count = 0;
   for (std::size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) ++inline_count;
