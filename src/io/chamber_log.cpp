@@ -280,6 +280,7 @@ bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
     sample.temperature[c] = spec_.scaling.temperature_scale_of(c) * sample.temperature[c] +
                             spec_.scaling.temperature_offset_of(c);
   }
+  check_physical_range(row, sample);
   if (!columns_.time) {
     sample.time = static_cast<double>(rows_) / *spec_.rate_hz;
     return true;
@@ -299,6 +300,27 @@ bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
   previous_text_.assign(text);
   sample.time = stamp.seconds_since(origin_->stamp);
   return true;
+}
+
+// A finite value beyond the physical range is no glitch of the link to drop but a wrong
+// file, unit or scale: always an error, like NaN. Judged after unit and scaling, so a
+// raw-count log read with its scale passes.
+void LogSampleReader::check_physical_range(const CsvRow& row, const LogSample& sample) const {
+  for (std::size_t a = 0; a < sample.gyro.size(); ++a) {
+    if (std::abs(sample.gyro[a]) <= kMaxRateDph) continue;
+    throw DataError(reader_.path(), row.line, columns_.gyro[a] + 1,
+                    fmt::format("gyro '{}' is {:.4g} °/h, beyond the physical range of ±{:.4g} °/h (10^5 °/s): "
+                                "check --gyro-unit and --gyro-scale",
+                                row.cell(columns_.gyro[a]), sample.gyro[a], kMaxRateDph));
+  }
+  for (std::size_t c = 0; c < sample.temperature.size(); ++c) {
+    const double t = sample.temperature[c];
+    if (t >= kMinTemperatureC && t <= kMaxTemperatureC) continue;
+    throw DataError(reader_.path(), row.line, columns_.temperature[c] + 1,
+                    fmt::format("temperature '{}' is {:.4g} °C, beyond the physical range of {} to {} °C: "
+                                "check --temp-scale and --temp-offset",
+                                row.cell(columns_.temperature[c]), t, kMinTemperatureC, kMaxTemperatureC));
+  }
 }
 
 // Reads the time cell exactly; false when the row was dropped as garbled.

@@ -2,9 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <string_view>
 
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
@@ -14,7 +17,72 @@ namespace thermodrift {
 
 namespace {
 constexpr const char* kFormatName = "thermodrift-model";
+
+// Every number a model applies — coefficients, scales, support vectors, pipeline and
+// envelope values — lies far inside this bound: features are °C, °C/min and s, targets
+// °/h below 3.6e8 (kMaxRateDph). A number beyond it is a failed fit or an edited file,
+// and would give inf or garbage drift on every sample.
+constexpr double kModelNumberLimit = 1e12;
+
+// The first null (JSON's stand-in for NaN and inf) or number beyond the limit in `json`
+// but its member `skip`, named by its path ("model.coefficients[1]"); nothing if none.
+std::optional<std::string> find_bad_number(const nlohmann::json& json, const std::string& path,
+                                           std::string_view skip = {}) {
+  const std::string& name = path.empty() ? std::string("the file") : path;
+  if (json.is_null()) return fmt::format("{} is null, not a finite number", name);
+  if (json.is_number()) {
+    const double value = json.get<double>();
+    if (!std::isfinite(value)) return fmt::format("{} is not a finite number", name);
+    if (std::abs(value) > kModelNumberLimit) {
+      return fmt::format("{} is {:.6g}, beyond the ±{:g} a model's numbers stay within", name, value,
+                         kModelNumberLimit);
+    }
+  } else if (json.is_array()) {
+    for (std::size_t i = 0; i < json.size(); ++i) {
+      if (auto bad = find_bad_number(json[i], fmt::format("{}[{}]", path, i))) return bad;
+    }
+  } else if (json.is_object()) {
+    for (const auto& [key, value] : json.items()) {
+      if (path.empty() && key == skip) continue;
+      if (auto bad = find_bad_number(value, path.empty() ? key : fmt::format("{}.{}", path, key))) return bad;
+    }
+  }
+  return std::nullopt;
 }
+
+// Why reading `json` failed with `e`: a number expected but null found is named by its
+// path rather than by nlohmann's "type must be number, but is null".
+std::string why_unreadable(const std::exception& e, const nlohmann::json& json, std::string_view skip) {
+  if (dynamic_cast<const nlohmann::json::type_error*>(&e) != nullptr) {
+    if (auto bad = find_bad_number(json, "", skip)) return *bad;
+  }
+  return e.what();
+}
+
+// nlohmann keeps the last of repeated keys silently; in a model file a repeated key is
+// an edit gone wrong, and which value applies would be a guess.
+nlohmann::json parse_without_duplicate_keys(const std::string& text, const std::string& path) {
+  std::vector<std::vector<std::string>> open_objects;
+  std::string duplicate;
+  auto check = [&](int /*depth*/, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start) {
+      open_objects.emplace_back();
+    } else if (event == Event::object_end) {
+      open_objects.pop_back();
+    } else if (event == Event::key && duplicate.empty()) {
+      auto& keys = open_objects.back();
+      const auto& key = parsed.get_ref<const std::string&>();
+      if (std::find(keys.begin(), keys.end(), key) != keys.end()) duplicate = key;
+      keys.push_back(key);
+    }
+    return true;
+  };
+  nlohmann::json json = nlohmann::json::parse(text, check);
+  if (!duplicate.empty()) throw DataError(path, 0, 0, fmt::format("key \"{}\" appears twice in one object", duplicate));
+  return json;
+}
+}  // namespace
 
 double AxisModel::predict(std::span<const double> features) const {
   return std::visit([&](const auto& m) { return m.predict(features); }, model);
@@ -158,25 +226,35 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
                                     "input(s)", channel + 1, inputs));
           }
         }
+        // Whatever the checks above did not read: the fit record is informational.
+        if (auto bad = find_bad_number(entry, "", "fit")) throw Error(*bad);
         model.axes.push_back(std::move(axis));
       } catch (const DataError&) {
         throw;
       } catch (const std::exception& e) {
-        throw fail(fmt::format("axis {}: {}", index + 1, e.what()));
+        throw fail(fmt::format("axis {}: {}", index + 1, why_unreadable(e, entry, "fit")));
       }
       ++index;
     }
+    if (auto bad = find_bad_number(json, "", "axes")) throw Error(*bad);
     return model;
   } catch (const DataError&) {
     throw;
   } catch (const std::exception& e) {
-    throw fail(fmt::format("invalid model file: {}", e.what()));
+    throw fail(fmt::format("invalid model file: {}", why_unreadable(e, json, "axes")));
   }
 }
 
 void save_drift_model(const DriftModel& model, const std::string& path,
                       const std::vector<std::string>& inputs) {
-  write_file_atomically(path, to_json(model).dump(1) + "\n", inputs);
+  const std::string text = to_json(model).dump(1) + "\n";
+  // What is written must load: a fit that produced NaN or an absurd number stops here.
+  try {
+    drift_model_from_json(nlohmann::json::parse(text), path);
+  } catch (const DataError& e) {
+    throw Error(fmt::format("{}: the fitted model is not usable, nothing written: {}", path, e.message()));
+  }
+  write_file_atomically(path, text, inputs);
 }
 
 DriftModel load_drift_model(const std::string& path) {
@@ -187,7 +265,7 @@ DriftModel load_drift_model(const std::string& path) {
   const std::string text = buffer.str();
   nlohmann::json json;
   try {
-    json = nlohmann::json::parse(text);
+    json = parse_without_duplicate_keys(text, path);
   } catch (const nlohmann::json::parse_error& e) {
     // Turn the byte offset into line and column for the one-line error.
     std::size_t line = 1, column = 1;

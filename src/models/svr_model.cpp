@@ -138,6 +138,17 @@ SvrModel SvrModel::from_json(const nlohmann::json& json, const std::vector<std::
     if (!std::isfinite(v)) throw Error("non-finite number in the SVR model");
   }
   if (!(model.function.gamma > 0)) throw Error("gamma must be positive");
+  // Predictions are target_mean + target_scale·f(x): a scale of 0 makes every one the mean.
+  if (!(model.scaling.target_scale > 0)) throw Error(fmt::format("target_scale must be positive, not {}", model.scaling.target_scale));
+  // sigma is written for people beside gamma = 1/(2 sigma²); an edit of one alone leaves
+  // a file whose reader cannot tell which was meant.
+  if (json.contains("sigma")) {
+    const double sigma = json.at("sigma").get<double>();
+    if (!(std::abs(sigma - model.sigma()) <= 1e-9 * model.sigma())) {
+      throw Error(fmt::format("sigma {} disagrees with gamma {} (sigma = {:.17g})", sigma, model.function.gamma,
+                              model.sigma()));
+    }
+  }
   const auto& support_vectors = json.at("support_vectors");
   const std::size_t n = support_vectors.size();
   model.function.coefficients = as_eigen(json.at("coefficients"), n, "coefficients");

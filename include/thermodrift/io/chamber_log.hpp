@@ -20,6 +20,14 @@ GyroUnit parse_gyro_unit(std::string_view name);  // "dph", "dps", "radps"; Usag
 std::string_view to_string(GyroUnit unit);
 double degrees_per_hour(GyroUnit unit);  // factor from `unit` to °/h
 
+// Physical ranges of a log's values in the library's units, after --gyro-unit and the
+// scaling: a value beyond them is no reading of a gyro in a chamber but a corrupted cell,
+// a wrong unit or a raw count read without its scale, and is a DataError at its cell
+// (docs/data.md). Wide on purpose: 10^5 °/s is 50 times the fastest MEMS gyro's range.
+inline constexpr double kMinTemperatureC = -273.15;  // absolute zero
+inline constexpr double kMaxTemperatureC = 1000;
+inline constexpr double kMaxRateDph = 3.6e8;  // |rate|: 10^5 °/s
+
 // Raw log values to the library's units: °C = temperature_scale·raw + temperature_offset,
 // °/h = degrees_per_hour(gyro_unit)·gyro_scale·raw. Each list holds one value for every
 // column or one per column, in the order the columns are named; empty means the default
@@ -122,8 +130,9 @@ struct LogSample {
 
 // Reads a log's rows one at a time, as samples: the one reader behind read_chamber_log
 // and the streaming `thermodrift compensate`, so both read every row alike. Garbled rows
-// are dropped (see CsvOptions); NaN/Inf, a time stamp out of order or in the other form
-// (number / ISO 8601) than the first row's are DataErrors naming line and column.
+// are dropped (see CsvOptions); NaN/Inf, a value beyond the physical range, a time stamp
+// out of order or in the other form (number / ISO 8601) than the first row's are
+// DataErrors naming line and column.
 class LogSampleReader {
  public:
   // Resolves the columns (resolve_columns); `reader` must outlive this.
@@ -142,6 +151,7 @@ class LogSampleReader {
  private:
   bool read(const CsvRow& row, LogSample& sample);
   bool read_time(const CsvRow& row, TimeStamp& stamp);
+  void check_physical_range(const CsvRow& row, const LogSample& sample) const;
 
   CsvReader& reader_;
   LogSpec spec_;

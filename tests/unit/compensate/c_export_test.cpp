@@ -416,10 +416,17 @@ TEST_F(CExport, RawInputsMatchTheCompensatorOnTheLogAsRead) {
   TempDir dir;
   const std::string path = dir.write("raw.csv", csv);
   const ChamberLog as_read = read_chamber_log(path, spec);
-  LogSpec unscaled = spec;
-  unscaled.gyro_unit = GyroUnit::dph;
-  unscaled.scaling = {};
-  const ChamberLog raw = read_chamber_log(path, unscaled);
+  // The values as the file holds them: read as °C and °/h, the temperature counts would be
+  // beyond the physical range of a temperature.
+  ChamberLog raw = as_read;
+  CsvReader reader(path);
+  for (std::size_t i = 0; const auto row = reader.next(); ++i) {
+    const std::size_t axes = raw.axes();
+    for (std::size_t a = 0; a < axes; ++a) raw.gyro[a][i] = parse_cell(row->cell(1 + a), path, row->line, 2 + a);
+    for (std::size_t c = 0; c < raw.temperature.size(); ++c) {
+      raw.temperature[c][i] = parse_cell(row->cell(1 + axes + c), path, row->line, 2 + axes + c);
+    }
+  }
   EXPECT_NEAR(raw.temperature[0][0], (as_read.temperature[0][0] + 231) * 256, 1e-6);
 
   for (const bool single : {false, true}) {

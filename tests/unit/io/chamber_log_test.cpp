@@ -216,6 +216,55 @@ TEST(ChamberLogErrors, NumberOutOfRangeIsAnError) {
   EXPECT_EQ(error.column(), 3u);
 }
 
+// A finite but absurd value is a wrong file, unit or scale, never a glitch to drop: an
+// error at its cell like NaN, judged on the value after the unit and the scaling.
+TEST(ChamberLogErrors, ValuesBeyondThePhysicalRangeAreErrors) {
+  TempDir dir;
+  std::string gyro = kHeader, temperature = kHeader;
+  for (int i = 0; i < 3000; ++i) {
+    gyro += std::to_string(i) + (i == 7 ? ",20,1e300\n" : ",20,1\n");
+    temperature += std::to_string(i) + (i == 2000 ? ",-1e300,1\n" : ",20,1\n");
+  }
+  const auto gyro_error = log_error(dir.write("gyro.csv", gyro), named_spec());
+  EXPECT_EQ(gyro_error.line(), 9u);
+  EXPECT_EQ(gyro_error.column(), 3u);
+  EXPECT_TRUE(contains(gyro_error.message(), "gyro '1e300' is 1e+300 °/h, beyond the physical range"))
+      << gyro_error.what();
+  const auto temperature_error = log_error(dir.write("temperature.csv", temperature), named_spec());
+  EXPECT_EQ(temperature_error.line(), 2002u);
+  EXPECT_EQ(temperature_error.column(), 2u);
+  EXPECT_TRUE(contains(temperature_error.message(), "beyond the physical range of -273.15 to 1000 °C"))
+      << temperature_error.what();
+
+  // 2·10^5 °/s, or in rad/s: beyond.
+  const auto fast = dir.write("fast.csv", kHeader + "0,20,1\n1,20,2e5\n");
+  LogSpec spec = named_spec();
+  spec.gyro_unit = GyroUnit::dps;
+  EXPECT_EQ(log_error(fast, spec).line(), 3u);
+  spec.gyro_unit = GyroUnit::radps;
+  EXPECT_EQ(log_error(dir.write("fast_rad.csv", kHeader + "0,20,1\n1,20,2000\n"), spec).line(), 3u);
+  // A raw-count log is judged after its scale: 16-bit counts of 1/256 °C above -231 °C
+  // and a 32-bit gyro count at 1e-9 °/s per count load; without the scale they do not.
+  const auto raw = dir.write("raw.csv", kHeader + "0,65535,2000000000\n1,32768,-2000000000\n");
+  spec = named_spec();
+  spec.gyro_unit = GyroUnit::dps;
+  spec.scaling.temperature_scale = {0.00390625};
+  spec.scaling.temperature_offset = {-231};
+  spec.scaling.gyro_scale = {1e-9};
+  const auto log = read_chamber_log(raw, spec);
+  EXPECT_DOUBLE_EQ(log.temperature[0][0], 65535 * 0.00390625 - 231);
+  EXPECT_DOUBLE_EQ(log.gyro[0][1], -2 * 3600.0);
+  spec.scaling = {};
+  const auto unscaled = log_error(raw, spec);
+  EXPECT_EQ(unscaled.column(), 3u);
+  EXPECT_TRUE(contains(unscaled.message(), "check --gyro-unit and --gyro-scale")) << unscaled.what();
+  spec.scaling.gyro_scale = {1e-9};
+  const auto unscaled_temperature = log_error(raw, spec);
+  EXPECT_EQ(unscaled_temperature.column(), 2u);
+  EXPECT_TRUE(contains(unscaled_temperature.message(), "check --temp-scale and --temp-offset"))
+      << unscaled_temperature.what();
+}
+
 TEST(ChamberLogErrors, TimeGoingBackwards) {
   TempDir dir;
   std::string text = kHeader;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <tuple>
 
@@ -386,6 +387,75 @@ TEST(ModelFileErrors, NonFiniteNumbers) {
     json = nlohmann::json::parse(text);
     json["axes"][1]["model"]["intercept"] = bad;
     EXPECT_THROW(drift_model_from_json(json, "api.json"), DataError) << bad;
+  }
+}
+
+// Finite but absurd numbers would give inf or garbage drift on every sample, and a
+// file that says two things at once (a key twice, sigma against gamma) has no one reading.
+TEST(ModelFileErrors, AbsurdNumbersDuplicateKeysAndDisagreeingSigma) {
+  TempDir dir;
+  auto json = saved_json(dir);
+  json["axes"][0]["model"]["coefficients"][0] = 1e308;
+  auto error = load_error(dir.write("huge.json", json.dump()));
+  EXPECT_EQ(error.line(), 0u);
+  EXPECT_TRUE(contains(error.message(), "axis 1: model.coefficients[0] is 1e+308, beyond the ±1e+12")) << error.what();
+  json = saved_json(dir);
+  json["axes"][1]["pipeline"]["reference_temperature"] = nullptr;
+  error = load_error(dir.write("null.json", json.dump()));
+  EXPECT_TRUE(contains(error.message(), "axis 2: pipeline.reference_temperature is null, not a finite number"))
+      << error.what();
+  json = saved_json(dir);
+  json["rate_hz"] = -3e15;
+  EXPECT_TRUE(contains(load_error(dir.write("rate.json", json.dump())).message(), "rate_hz is -3e+15, beyond"));
+  // The informational fit record may hold anything.
+  json = saved_json(dir);
+  json["axes"][0]["fit"]["mse_before"] = 4e20;
+  json["axes"][0]["fit"]["note"] = nullptr;
+  EXPECT_NO_THROW(load_drift_model(dir.write("fit.json", json.dump())));
+
+  std::string text = saved_json(dir).dump(1);
+  text.replace(text.find("\"gyro_unit\""), 0, "\"gyro_unit\": \"dph\", ");
+  error = load_error(dir.write("twice.json", text));
+  EXPECT_TRUE(contains(error.message(), "key \"gyro_unit\" appears twice in one object")) << error.what();
+
+  const std::vector<std::string> terms = {"dT", "rate"};
+  SvrModel svr;
+  svr.scaling = Standardization::identity(2);
+  svr.function.gamma = 0.5;
+  svr.function.coefficients = Eigen::VectorXd::Constant(1, 0.3);
+  svr.function.support_vectors = Eigen::MatrixXd::Constant(1, 2, 0.2);
+  svr.C = 10;
+  auto refusal = [&](const nlohmann::json& body) -> std::string {
+    try {
+      SvrModel::from_json(body, terms);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  EXPECT_EQ(refusal(svr.to_json(terms)), "accepted");
+  auto body = svr.to_json(terms);
+  body["target_scale"] = 0;
+  EXPECT_TRUE(contains(refusal(body), "target_scale must be positive")) << refusal(body);
+  body = svr.to_json(terms);
+  body["sigma"] = 3.0;
+  EXPECT_TRUE(contains(refusal(body), "sigma 3 disagrees with gamma 0.5")) << refusal(body);
+}
+
+// fit never writes what it could not load again.
+TEST(ModelFileErrors, AModelThatWouldNotLoadIsNotWritten) {
+  TempDir dir;
+  for (double bad : {std::numeric_limits<double>::quiet_NaN(), 5e295}) {
+    DriftModel model = two_axis_model();
+    std::get<LinearModel>(model.axes[1].model).intercept = bad;
+    try {
+      save_drift_model(model, dir.file("m.json"));
+      ADD_FAILURE() << "saved an intercept of " << bad;
+    } catch (const Error& e) {
+      EXPECT_TRUE(contains(e.what(), "the fitted model is not usable, nothing written: axis 2: model.intercept"))
+          << e.what();
+    }
+    EXPECT_TRUE(dir.entries().empty());
   }
 }
 
