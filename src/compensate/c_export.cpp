@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/features/moving_average.hpp"
 #include "thermodrift/features/terms.hpp"
 
 namespace thermodrift {
@@ -605,25 +606,32 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "                                    {p}_real temperature, {p}_real* smoothed, {p}_real* rate, int* dropped) {{\n"
       "  double elapsed;\n"
       "  const {p}_stamped* past;\n"
+      "  {p}_real leaving;\n"
+      "  int jump = 0;\n"
       "  /* trailing mean over (t - smooth, t] */\n"
       "  while (channel->mean_count > 0 && channel->mean_ring[channel->mean_head].time <= time - pipeline->smooth_seconds) {{\n"
+      "    leaving = channel->mean_ring[channel->mean_head].value;\n"
       "    {subtract_oldest}\n"
       "    channel->mean_head = (channel->mean_head + 1) % {P}_MEAN_CAPACITY;\n"
       "    --channel->mean_count;\n"
+      "    {jump}\n"
       "  }}\n"
       "  if (channel->mean_count == channel->resum_period) channel->resum_period *= 2;\n"
       "  if (channel->mean_count == {P}_MEAN_CAPACITY) {{\n"
+      "    leaving = channel->mean_ring[channel->mean_head].value;\n"
       "    {subtract_oldest}\n"
       "    channel->mean_head = (channel->mean_head + 1) % {P}_MEAN_CAPACITY;\n"
       "    --channel->mean_count;\n"
+      "    {jump}\n"
       "    *dropped = 1;\n"
       "  }}\n"
       "  channel->mean_ring[(channel->mean_head + channel->mean_count) % {P}_MEAN_CAPACITY].time = time;\n"
       "  channel->mean_ring[(channel->mean_head + channel->mean_count) % {P}_MEAN_CAPACITY].value = temperature;\n"
       "  ++channel->mean_count;\n"
       "  {add_temperature}\n"
-      "  /* a running sum drifts by rounding; re-adding the window once per period keeps it exact */\n"
-      "  if (++channel->pushes_since_resum >= channel->resum_period) {{\n"
+      "  /* a running sum drifts by rounding; re-adding the window once per period keeps it exact,\n"
+      "   * and at once when a value far larger than what stays has left (it took their digits) */\n"
+      "  if (++channel->pushes_since_resum >= channel->resum_period || jump) {{\n"
       "    unsigned long i;\n"
       "    channel->mean_sum = 0;\n"
       "{reset_carry_inner}"
@@ -683,8 +691,11 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
                               : std::string()),
       fmt::arg("reset_carry", single ? "  channel->mean_carry = 0;\n" : ""),
       fmt::arg("reset_carry_inner", single ? "    channel->mean_carry = 0;\n" : ""),
-      fmt::arg("subtract_oldest",
-               accumulate("channel->mean_sum", "channel->mean_carry", "-channel->mean_ring[channel->mean_head].value")),
+      fmt::arg("subtract_oldest", accumulate("channel->mean_sum", "channel->mean_carry", "-leaving")),
+      fmt::arg("jump", fmt::format("if ({fabs}(leaving) > ({p}_real){limit} * ({fabs}(channel->mean_sum) + "
+                                   "({p}_real)channel->mean_count)) jump = 1;",
+                                   fmt::arg("fabs", single ? "fabsf" : "fabs"), fmt::arg("p", p),
+                                   fmt::arg("limit", literal(TrailingMean::kResumJump)))),
       fmt::arg("add_temperature", accumulate("channel->mean_sum", "channel->mean_carry", "temperature")),
       fmt::arg("add_entry", accumulate("channel->mean_sum", "channel->mean_carry",
                                        fmt::format("channel->mean_ring[(channel->mean_head + i) % {}_MEAN_CAPACITY].value", P))));

@@ -9,6 +9,11 @@ namespace thermodrift {
 
 class TrailingMean {
  public:
+  // A value leaving the window that is more than this many times |sum left| + count
+  // (a floor of one unit per sample, so a mean near 0 is no trigger) re-sums the window
+  // at once rather than at the next periodic re-sum. The exported C header does the same.
+  static constexpr double kResumJump = 1048576.0;  // 2^20
+
   // Mean of the samples whose time lies in (t - window, t]. A window of 0 passes each
   // sample through.
   explicit TrailingMean(double window_seconds);

@@ -353,6 +353,20 @@ TEST_F(CExport, WarmUpAndGapRestartLikeTheCompensator) {
   }
 }
 
+struct SpoiledRuns {
+  CRun c;        // the header on the spoiled log
+  CppRun cpp;    // the compensator on the spoiled log
+  CppRun clean;  // the compensator on the log as it was
+};
+
+SpoiledRuns run_spoiled(const DriftModel& model, const ChamberLog& spoiled, const ChamberLog& clean) {
+  TempDir dir;
+  CExportOptions options;
+  options.max_rate_hz = 1.0;
+  return {run_exported(dir, export_c_header(model, options), spoiled), run_compensator(model, spoiled),
+          run_compensator(model, clean)};
+}
+
 // Failed sensor reads (NaN, inf) in the field: the sample is rejected whole, never flagged
 // ready, and the state goes on as if it had not come; the header does as the compensator.
 TEST_F(CExport, NonFiniteInputsAreRejectedWholeLikeTheCompensator) {
@@ -361,12 +375,7 @@ TEST_F(CExport, NonFiniteInputsAreRejectedWholeLikeTheCompensator) {
   bad.temperature[0][500] = std::numeric_limits<double>::quiet_NaN();
   bad.gyro[1][900] = std::numeric_limits<double>::quiet_NaN();
   bad.temperature[2][1300] = std::numeric_limits<double>::infinity();
-  TempDir dir;
-  CExportOptions options;
-  options.max_rate_hz = 1.0;
-  const CRun c = run_exported(dir, export_c_header(*svr_, options), bad);
-  const CppRun cpp = run_compensator(*svr_, bad);
-  const CppRun clean = run_compensator(*svr_, *log_);
+  const auto [c, cpp, clean] = run_spoiled(*svr_, bad, *log_);
   ASSERT_EQ(c.ready.size(), bad.rows());
   EXPECT_EQ(c.ready, cpp.ready);
   for (std::size_t i = 0; i < bad.rows(); ++i) {
@@ -387,6 +396,24 @@ TEST_F(CExport, NonFiniteInputsAreRejectedWholeLikeTheCompensator) {
     EXPECT_NEAR(cpp.compensated[3000][a], clean.compensated[3000][a], 1e-6 * clean.drift_scale) << a;
   }
   EXPECT_EQ(cpp.ready[3000], 1);
+}
+
+// One huge finite temperature that reaches the field code (the header has no file check)
+// spoils only the samples whose window and rate span hold it: the running sum is re-added
+// when it leaves, in C++ and in the header alike.
+TEST_F(CExport, OneHugeTemperatureDoesNotPoisonLaterSamples) {
+  ChamberLog bad = *log_;
+  const std::size_t at = 1500;
+  ASSERT_GT(bad.rows(), at + 600);
+  bad.temperature[0][at] = 1e300;
+  const auto [c, cpp, clean] = run_spoiled(*linear_, bad, *log_);
+  ASSERT_EQ(c.ready.size(), bad.rows());
+  // 1 Hz, a 100 s window and a 100 s rate span: from `at` + 200 on nothing of it is left.
+  for (std::size_t i = at + 200; i < at + 600; ++i) {
+    EXPECT_NEAR(cpp.compensated[i][0], clean.compensated[i][0], 1e-9 * clean.drift_scale) << i;
+    EXPECT_NEAR(c.compensated[i][0], clean.compensated[i][0], 1e-9 * clean.drift_scale) << i;
+    EXPECT_EQ(c.ready[i], cpp.ready[i]) << i;
+  }
 }
 
 // A model of a raw-count log: the header takes the values as the log holds them (gyro in

@@ -96,5 +96,25 @@ TEST(TrailingMean, StaysExactOverManySamples) {
   EXPECT_NEAR(got, want, 1e-9);
 }
 
+// One huge finite value (a corrupted reading that got past the file checks) took the
+// other samples' digits with it when it was added (1e300 + 20 is 1e300): once it has left,
+// the mean is the window's again at once, not a re-sum period later.
+TEST(TrailingMean, OneHugeValueDoesNotPoisonTheMeanAfterItLeaves) {
+  std::vector<double> times, values;
+  for (int i = 0; i < 400; ++i) {
+    times.push_back(i);
+    values.push_back(i == 100 ? 1e300 : 20.0 + 0.01 * (i % 13));
+  }
+  for (double huge : {1e300, -1e300, 1e17}) {
+    values[100] = huge;
+    TrailingMean mean(30.0);
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      const double got = mean.push(times[k], values[k]);
+      if (k < 130) continue;  // the window (k - 30, k] holds the huge value
+      ASSERT_NEAR(got, brute_force_mean(times, values, k, 30.0), 1e-12) << huge << " sample " << k;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace thermodrift
