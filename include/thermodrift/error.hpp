@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace thermodrift {
 
@@ -44,6 +45,10 @@ class DataError : public Error {
   std::size_t column_;
   std::string message_;
 };
+
+// At most `limit` characters of `text` (a cell, a header name) for a message, then "…":
+// a 50 MB cell must not be echoed whole. Cut at a UTF-8 character boundary.
+std::string excerpt(std::string_view text, std::size_t limit = 40);
 
 // Exit statuses of the command-line tool (CLI.md).
 enum class ExitStatus : int { ok = 0, failure = 1, usage = 2, bad_data = 3, interrupted = 130 };

@@ -108,8 +108,8 @@ std::size_t find_column(const std::string& name, const CsvReader& reader, const 
                                 role, name));
   }
   throw DataError(reader.path(), reader.header_line(), 0,
-                  fmt::format("no {} column named '{}' (columns: {})", role, name,
-                              fmt::join(reader.header(), ", ")));
+                  fmt::format("no {} column named '{}' (columns: {})", role, excerpt(name),
+                              excerpt(fmt::to_string(fmt::join(reader.header(), ", ")), 200)));
 }
 
 std::string lower_case(std::string_view text) {
@@ -182,7 +182,8 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
       for (auto index : columns.temperature) names.push_back(column_label(reader, index));
       throw UsageError(fmt::format("{}: {} temp* columns ({}) for {} gyro axes; name one for all axes or one "
                                    "per axis with --temp (further columns serve grad terms)",
-                                   reader.path(), names.size(), fmt::join(names, ","), columns.gyro.size()));
+                                   reader.path(), names.size(), excerpt(fmt::to_string(fmt::join(names, ",")), 200),
+                                   columns.gyro.size()));
     }
   } else {
     for (const auto& name : spec.temperature_columns) {
@@ -264,7 +265,7 @@ bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
     }
     reader_.drop_garbled(row, index + 1,
                          row.cell(index).empty() ? std::string("empty cell, expected a number")
-                                                 : fmt::format("'{}' is not a number", row.cell(index)));
+                                                 : fmt::format("'{}' is not a number", excerpt(row.cell(index))));
     return false;
   };
   TimeStamp stamp;
@@ -288,9 +289,9 @@ bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
   const std::string_view text = row.cell(*columns_.time);
   if (origin_) {
     const std::size_t column = *columns_.time + 1;
-    if (stamp == previous_) throw DataError(path, row.line, column, fmt::format("time {} repeats the previous row's", text));
+    if (stamp == previous_) throw DataError(path, row.line, column, fmt::format("time {} repeats the previous row's", excerpt(text)));
     if (stamp < previous_) {
-      throw DataError(path, row.line, column, fmt::format("time goes backwards ({} after {})", text, previous_text_));
+      throw DataError(path, row.line, column, fmt::format("time goes backwards ({} after {})", excerpt(text), excerpt(previous_text_)));
     }
   } else {
     // The first kept row's stamp is the origin the others count from.
@@ -311,7 +312,7 @@ void LogSampleReader::check_physical_range(const CsvRow& row, const LogSample& s
     throw DataError(reader_.path(), row.line, columns_.gyro[a] + 1,
                     fmt::format("gyro '{}' is {:.4g} °/h, beyond the physical range of ±{:.4g} °/h (10^5 °/s): "
                                 "check --gyro-unit and --gyro-scale",
-                                row.cell(columns_.gyro[a]), sample.gyro[a], kMaxRateDph));
+                                excerpt(row.cell(columns_.gyro[a])), sample.gyro[a], kMaxRateDph));
   }
   for (std::size_t c = 0; c < sample.temperature.size(); ++c) {
     const double t = sample.temperature[c];
@@ -319,7 +320,7 @@ void LogSampleReader::check_physical_range(const CsvRow& row, const LogSample& s
     throw DataError(reader_.path(), row.line, columns_.temperature[c] + 1,
                     fmt::format("temperature '{}' is {:.4g} °C, beyond the physical range of {} to {} °C: "
                                 "check --temp-scale and --temp-offset",
-                                row.cell(columns_.temperature[c]), t, kMinTemperatureC, kMaxTemperatureC));
+                                excerpt(row.cell(columns_.temperature[c])), t, kMinTemperatureC, kMaxTemperatureC));
   }
 }
 
@@ -341,8 +342,8 @@ bool LogSampleReader::read_time(const CsvRow& row, TimeStamp& stamp) {
   if (!origin_) return true;
   if (stamp.iso != origin_->stamp.iso) {
     reader_.drop_garbled(row, column,
-                         fmt::format("'{}': expected {} like the first row's ('{}')", text,
-                                     origin_->stamp.iso ? "an ISO 8601 time stamp" : "a number", origin_->text));
+                         fmt::format("'{}': expected {} like the first row's ('{}')", excerpt(text),
+                                     origin_->stamp.iso ? "an ISO 8601 time stamp" : "a number", excerpt(origin_->text)));
     return false;
   }
   return true;

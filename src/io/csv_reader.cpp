@@ -76,9 +76,9 @@ std::string describe(CellStatus status, std::string_view cell) {
   switch (status) {
     case CellStatus::ok: return "a number";
     case CellStatus::empty: return "empty cell, expected a number";
-    case CellStatus::not_a_number: return fmt::format("'{}' is not a number", cell);
-    case CellStatus::not_finite: return fmt::format("'{}' is not a finite number", cell);
-    case CellStatus::out_of_range: return fmt::format("'{}' is out of the range of a double", cell);
+    case CellStatus::not_a_number: return fmt::format("'{}' is not a number", excerpt(cell));
+    case CellStatus::not_finite: return fmt::format("'{}' is not a finite number", excerpt(cell));
+    case CellStatus::out_of_range: return fmt::format("'{}' is out of the range of a double", excerpt(cell));
   }
   return "bad cell";
 }
@@ -103,10 +103,19 @@ CsvReader::CsvReader(std::unique_ptr<std::istream> input, std::string name, CsvO
 }
 
 bool CsvReader::read_line(std::string& line) {
-  if (!std::getline(*stream_, line)) {
-    if (stream_->bad()) throw DataError(path_, line_number_ + 1, 0, "read error");
-    return false;
+  line.clear();
+  std::streambuf& input = *stream_->rdbuf();
+  bool any = false;
+  for (auto c = input.sbumpc(); c != std::char_traits<char>::eof(); c = input.sbumpc()) {
+    any = true;
+    if (c == '\n') break;
+    if (line.size() == options_.max_line_bytes) {
+      throw DataError(path_, line_number_ + 1, 0,
+                      fmt::format("line longer than {} bytes (no line ending?): not a log line", options_.max_line_bytes));
+    }
+    line.push_back(static_cast<char>(c));
   }
+  if (!any) return false;
   ++line_number_;
   if (line_number_ == 1 && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
   if (!line.empty() && line.back() == '\r') line.pop_back();

@@ -13,6 +13,14 @@ std::string locate(const std::string& file, std::size_t line, std::size_t column
 }
 }  // namespace
 
+std::string excerpt(std::string_view text, std::size_t limit) {
+  if (text.size() <= limit) return std::string(text);
+  std::size_t cut = limit;
+  // Back off continuation bytes (10xxxxxx) so no character is split.
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
+  return std::string(text.substr(0, cut)) + "…";
+}
+
 DataError::DataError(std::string file, std::size_t line, std::size_t column,
                      const std::string& message)
     : Error(locate(file, line, column, message)),

@@ -69,7 +69,7 @@ LabelledData read_libsvm(std::istream& input, const std::string& name) {
     SparseRow row;
     if (!parse_double(label_token, &row.label)) {
       throw DataError(name, line_number, label_start + 1,
-                      fmt::format("bad label '{}': expected a finite number", label_token));
+                      fmt::format("bad label '{}': expected a finite number", excerpt(label_token)));
     }
     long previous_index = 0;
     for (;;) {
@@ -78,13 +78,13 @@ LabelledData read_libsvm(std::istream& input, const std::string& name) {
       std::size_t colon = token.find(':');
       if (colon == std::string_view::npos) {
         throw DataError(name, line_number, start + 1,
-                        fmt::format("missing ':' in '{}': expected index:value", token));
+                        fmt::format("missing ':' in '{}': expected index:value", excerpt(token)));
       }
       long index = 0;
       if (!parse_index(token.substr(0, colon), &index)) {
         throw DataError(name, line_number, start + 1,
                         fmt::format("bad index '{}': expected an integer >= 1",
-                                    token.substr(0, colon)));
+                                    excerpt(token.substr(0, colon))));
       }
       if (index <= previous_index) {
         throw DataError(name, line_number, start + 1,
@@ -95,7 +95,7 @@ LabelledData read_libsvm(std::istream& input, const std::string& name) {
       if (!parse_double(token.substr(colon + 1), &value)) {
         throw DataError(name, line_number, start + colon + 2,
                         fmt::format("bad value '{}': expected a finite number",
-                                    token.substr(colon + 1)));
+                                    excerpt(token.substr(colon + 1))));
       }
       if (index > kMaxLibsvmFeatureIndex) {
         throw DataError(name, line_number, start + 1,

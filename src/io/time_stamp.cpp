@@ -60,18 +60,18 @@ bool parse_decimal(std::string_view cell, int unit_exponent, TimeStamp& stamp, s
       break;
     }
   }
-  if (digits.empty()) return fail(cell.empty() ? "empty cell, expected a number" : fmt::format("'{}' is not a number", cell));
+  if (digits.empty()) return fail(cell.empty() ? "empty cell, expected a number" : fmt::format("'{}' is not a number", excerpt(cell)));
   long exponent = 0;
   if (at < cell.size() && (cell[at] == 'e' || cell[at] == 'E')) {
     ++at;
     const char* begin = cell.data() + at;
     if (at < cell.size() && cell[at] == '+') ++begin;
     const auto result = std::from_chars(begin, cell.data() + cell.size(), exponent);
-    if (result.ec == std::errc::result_out_of_range) return fail(fmt::format("'{}' is out of the range of a time", cell));
-    if (result.ec != std::errc{}) return fail(fmt::format("'{}' is not a number", cell));
+    if (result.ec == std::errc::result_out_of_range) return fail(fmt::format("'{}' is out of the range of a time", excerpt(cell)));
+    if (result.ec != std::errc{}) return fail(fmt::format("'{}' is not a number", excerpt(cell)));
     at = static_cast<std::size_t>(result.ptr - cell.data());
   }
-  if (at != cell.size()) return fail(fmt::format("'{}' is not a number", cell));
+  if (at != cell.size()) return fail(fmt::format("'{}' is not a number", excerpt(cell)));
 
   // The digits with the decimal point `position` digits from their start, in seconds.
   const auto first = std::min(digits.find_first_not_of('0'), digits.size());
@@ -80,7 +80,7 @@ bool parse_decimal(std::string_view cell, int unit_exponent, TimeStamp& stamp, s
   if (significant.empty()) return true;
   const long position = integer_digits - static_cast<long>(first) + exponent + unit_exponent;
   if (position > kMaxIntegerDigits) {
-    return fail(fmt::format("'{}' is out of the range of a time (10^{} s or more)", cell, kMaxIntegerDigits));
+    return fail(fmt::format("'{}' is out of the range of a time (10^{} s or more)", excerpt(cell), kMaxIntegerDigits));
   }
   const auto length = static_cast<long>(significant.size());
   for (long i = 0; i < position; ++i) stamp.seconds = stamp.seconds * 10 + (i < length ? significant[static_cast<std::size_t>(i)] - '0' : 0);
@@ -188,7 +188,7 @@ class IsoReader {
 
   bool report(std::string* problem) const {
     if (problem != nullptr) {
-      *problem = fmt::format("'{}' is not an ISO 8601 time stamp: expected {} at character {}", cell_, expected_, at_ + 1);
+      *problem = fmt::format("'{}' is not an ISO 8601 time stamp: expected {} at character {}", excerpt(cell_), expected_, at_ + 1);
     }
     return false;
   }

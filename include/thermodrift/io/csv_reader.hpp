@@ -35,6 +35,9 @@ struct CsvRow {
 // is the error. NaN/Inf, time going backwards and missing columns are always errors.
 struct CsvOptions {
   std::size_t garbled_per_thousand = 1;  // tolerated garbled rows per 1000 data rows; 0: strict
+  // A longer line is a DataError at its line, found while reading it: a log line is a
+  // hundred bytes, and one without a line ending must not be held whole (docs/data.md).
+  std::size_t max_line_bytes = std::size_t{1} << 20;
 };
 
 class CsvReader {

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <istream>
+#include <memory>
+#include <streambuf>
 #include <string>
 #include <vector>
 
@@ -288,6 +291,96 @@ TEST(CsvReader, TwoGarbledRowsInAThousandAreTooMany) {
   EXPECT_EQ(error.line(), 302u);  // the first one
   EXPECT_EQ(error.column(), 3u);
   EXPECT_TRUE(contains(error.message(), "and 1 more malformed rows")) << error.what();
+}
+
+// A log of `head`, then one line of `length` digits generated as read (never held), then
+// `tail`; counts the bytes handed out.
+class LongLineLog : public std::streambuf {
+ public:
+  LongLineLog(std::string head, std::size_t length, std::string tail)
+      : head_(std::move(head)), length_(length), tail_(std::move(tail)) {}
+  std::size_t handed_out() const { return handed_out_; }
+
+ protected:
+  int_type underflow() override {
+    if (part_ == 0) {
+      part_ = 1;
+      return serve(head_.data(), head_.size());
+    }
+    if (part_ == 1 && left_of_line_ > 0) {
+      const std::size_t n = std::min(left_of_line_, digits_.size());
+      left_of_line_ -= n;
+      return serve(digits_.data(), n);
+    }
+    if (part_ == 1) {
+      part_ = 2;
+      return serve(tail_.data(), tail_.size());
+    }
+    return traits_type::eof();
+  }
+
+ private:
+  int_type serve(const char* data, std::size_t n) {
+    if (n == 0) return underflow();
+    char* begin = const_cast<char*>(data);
+    setg(begin, begin, begin + n);
+    handed_out_ += n;
+    return traits_type::to_int_type(*begin);
+  }
+  std::string head_;
+  std::size_t length_;
+  std::string tail_;
+  std::string digits_ = std::string(4096, '7');
+  std::size_t left_of_line_ = length_;
+  int part_ = 0;
+  std::size_t handed_out_ = 0;
+};
+
+class StreamOf : public std::istream {
+ public:
+  explicit StreamOf(LongLineLog* log) : std::istream(log) {}
+};
+
+// A 50 MB line (a log written without line endings, a binary file) is refused at its line
+// once the limit is passed, having read little more than the limit: memory per line is bounded.
+TEST(CsvReader, ALineLongerThanTheLimitIsAnErrorFoundWhileReadingIt) {
+  for (const std::string head : {std::string("time_s,temp,gyro_x\n0,20,1\n1,20,1\n"), std::string()}) {
+    LongLineLog log(head, 50'000'000, "\n2,20,1\n");
+    try {
+      CsvReader reader(std::make_unique<StreamOf>(&log), "long.csv");
+      while (reader.next()) {
+      }
+      ADD_FAILURE() << "a 50 MB line was read";
+    } catch (const DataError& error) {
+      EXPECT_EQ(error.line(), head.empty() ? 1u : 4u);
+      EXPECT_TRUE(contains(error.message(), "line longer than 1048576 bytes")) << error.what();
+      EXPECT_LT(error.message().size(), 100u);
+    }
+    EXPECT_LT(log.handed_out(), (1u << 20) + 8192u);
+  }
+  // Up to the limit a line is read.
+  CsvOptions small;
+  small.max_line_bytes = 12;
+  TempDir dir;
+  CsvReader up_to_the_limit(dir.write("ok.csv", "time_s,temp\n0,1234567890\n"), small);
+  EXPECT_EQ(all_rows(up_to_the_limit).size(), 1u);
+  const auto error = read_error(dir.write("long.csv", "time_s,temp\n0,12345678901\n"), small);
+  EXPECT_EQ(error.line(), 2u);
+}
+
+// Messages quote at most 40 characters of a cell, cut at a character boundary.
+TEST(CsvReader, MessagesQuoteAShortExcerptOfACell) {
+  const std::string cell(5000, 'x');
+  try {
+    parse_cell(cell, "log.csv", 3, 2);
+    ADD_FAILURE() << "accepted";
+  } catch (const DataError& error) {
+    EXPECT_EQ(error.message(), "'" + std::string(40, 'x') + "…' is not a number");
+  }
+  EXPECT_EQ(excerpt("short"), "short");
+  std::string accented = "a";
+  for (int i = 0; i < 30; ++i) accented += "é";  // two bytes each: byte 40 is a continuation
+  EXPECT_EQ(excerpt(accented), accented.substr(0, 39) + "…");
 }
 
 TEST(ParseNumber, ClassifiesCells) {
