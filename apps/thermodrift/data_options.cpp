@@ -1,4 +1,5 @@
 #include "data_options.hpp"
+#include "lists.hpp"
 #include "numbers.hpp"
 
 #include <fmt/format.h>
@@ -39,9 +40,9 @@ void DataOptions::add_to(CLI::App& app, bool data_required) {
   app.add_option("--time", time, "time column (in --time-unit, or ISO 8601 stamps), header name or 1-based index");
   app.add_option("--rate", rate, "sampling rate in Hz when there is no time column")
       ->check(kPositive);
-  app.add_option("--gyro", gyro, "gyro column(s), one model per axis")->delimiter(',');
-  app.add_option("--temp", temperature, "temperature column(s): one for all axes or one per axis, then any extra channels grad:A-B terms read")
-      ->delimiter(',');
+  add_list_option(app, "--gyro", gyro, "gyro column(s), one model per axis");
+  add_list_option(app, "--temp", temperature,
+                  "temperature column(s): one for all axes or one per axis, then any extra channels grad:A-B terms read");
   app.add_option("--gyro-unit", gyro_unit, "unit of the gyro columns: dph (°/h, default), dps (°/s), radps")
       ->check(CLI::IsMember({"dph", "dps", "radps"}));
   app.add_option("--time-unit", time_unit,

@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "data_options.hpp"
 #include "report_command.hpp"
+#include "lists.hpp"
 #include "numbers.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/report/report.hpp"
@@ -98,7 +99,7 @@ Command add_demo(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand("demo", "the paper's study on a simulated two-cycle chamber test, as an HTML report");
   app->add_option("--out", args->out, "folder for the log, models and report (default thermodrift-demo)");
   app->add_option("--seed", args->seed, "simulator seed");
-  app->add_option("--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
+  add_list_option(*app, "--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md");
   add_identify_option(*app, args->identify);
   app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(kPositive);
   return {app, [args] { return run_demo(*args); }};

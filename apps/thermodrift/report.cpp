@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "data_options.hpp"
 #include "report_command.hpp"
+#include "lists.hpp"
 #include "numbers.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
@@ -148,7 +149,7 @@ Command add_report(CLI::App& parent) {
                                    "hold out the log from this time (s) on")
       ->excludes(fraction);
   app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)");
-  app->add_option("--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md")->delimiter(',');
+  add_list_option(*app, "--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md");
   add_identify_option(*app, args->identify);
   app->add_option("--threads", args->threads, "threads for the SVR fits")->check(kPositive);
   app->add_option("--evaluations", args->evaluations, "AFSA budget of objective evaluations per axis (default 100)")

@@ -167,7 +167,17 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
                                    reader.path()));
     }
   } else {
-    for (const auto& name : spec.gyro_columns) columns.gyro.push_back(find_column(name, reader, "gyro"));
+    for (const auto& name : spec.gyro_columns) {
+      const std::size_t index = find_column(name, reader, "gyro");
+      // Two axes on one column would be one axis fitted and written twice.
+      if (const auto same = std::find(columns.gyro.begin(), columns.gyro.end(), index); same != columns.gyro.end()) {
+        throw UsageError(fmt::format("--gyro names column {} twice ('{}' and '{}'): one column per axis",
+                                     excerpt(column_label(reader, index)),
+                                     excerpt(spec.gyro_columns[static_cast<std::size_t>(same - columns.gyro.begin())]),
+                                     excerpt(name)));
+      }
+      columns.gyro.push_back(index);
+    }
   }
   if (spec.temperature_columns.empty()) {
     columns.temperature = columns_with_prefix(reader, "temp");

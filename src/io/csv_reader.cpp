@@ -109,6 +109,16 @@ bool CsvReader::read_line(std::string& line) {
   for (auto c = input.sbumpc(); c != std::char_traits<char>::eof(); c = input.sbumpc()) {
     any = true;
     if (c == '\n') break;
+    // Said for what they are, not left to fail later as "no time column found".
+    if (c == '\0' || (line_number_ == 0 && line.empty() && (c == 0xFF || c == 0xFE))) {
+      throw DataError(path_, line_number_ + 1, line.size() + 1,
+                      "a NUL byte or a UTF-16 byte-order mark: the file is UTF-16 or binary, not a text log "
+                      "(save it as UTF-8)");
+    }
+    if (c == '\r' && input.sgetc() != '\n' && input.sgetc() != std::char_traits<char>::eof()) {
+      throw DataError(path_, line_number_ + 1, line.size() + 1,
+                      "a line ends in CR alone (old Mac OS line endings): convert the file to LF or CRLF");
+    }
     if (line.size() == options_.max_line_bytes) {
       throw DataError(path_, line_number_ + 1, 0,
                       fmt::format("line longer than {} bytes (no line ending?): not a log line", options_.max_line_bytes));

@@ -50,13 +50,23 @@ std::optional<std::string> find_bad_number(const nlohmann::json& json, const std
   return std::nullopt;
 }
 
+// e.what() without nlohmann's "[json.exception.type_error.302] " tag: a message for
+// people, not a library's error code.
+std::string without_json_tag(const std::exception& e) {
+  std::string what = e.what();
+  if (const auto bracket = what.find("] "); what.starts_with("[json.exception") && bracket != std::string::npos) {
+    what.erase(0, bracket + 2);
+  }
+  return what;
+}
+
 // Why reading `json` failed with `e`: a number expected but null found is named by its
 // path rather than by nlohmann's "type must be number, but is null".
 std::string why_unreadable(const std::exception& e, const nlohmann::json& json, std::string_view skip) {
   if (dynamic_cast<const nlohmann::json::type_error*>(&e) != nullptr) {
     if (auto bad = find_bad_number(json, "", skip)) return *bad;
   }
-  return e.what();
+  return without_json_tag(e);
 }
 
 // nlohmann keeps the last of repeated keys silently; in a model file a repeated key is
@@ -283,11 +293,7 @@ DriftModel load_drift_model(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     // A number too large for a double ("1e999") is out_of_range, not a parse_error; it
     // must still be bad data naming the file, not an internal failure.
-    std::string what = e.what();
-    if (const auto bracket = what.find("] "); what.starts_with("[json.exception") && bracket != std::string::npos) {
-      what.erase(0, bracket + 2);
-    }
-    throw DataError(path, 0, 0, fmt::format("model file is not valid JSON: {}", what));
+    throw DataError(path, 0, 0, fmt::format("model file is not valid JSON: {}", without_json_tag(e)));
   }
   return drift_model_from_json(json, path);
 }

@@ -131,12 +131,17 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
   for (const auto& log : logs) {
     if (log.rows() > 0) longest = std::max(longest, log.time.back() - log.time.front());
   }
+  // A log well past its warm-up that still gives too few samples was thinned by the
+  // decimation, which a shorter --smooth would not help.
+  const bool thinned = pipeline.decimation > 1 && longest > 2 * pipeline.warm_up_seconds();
   throw DataError(logs.front().source, 0, 0,
                   fmt::format("too little data after the {:g} s warm-up (smoothing {:g} s + rate span "
-                              "{:g} s): {} usable samples, at least {} needed; the longest log spans "
-                              "{:g} s (a shorter --smooth helps)",
-                              pipeline.warm_up_seconds(), pipeline.smooth_seconds,
-                              pipeline.rate_span_seconds, table.rows(), needed, longest));
+                              "{:g} s){}: {} usable samples, at least {} needed; the longest log spans "
+                              "{:g} s ({})",
+                              pipeline.warm_up_seconds(), pipeline.smooth_seconds, pipeline.rate_span_seconds,
+                              thinned ? fmt::format(" and keeping one ready sample in {}", pipeline.decimation) : "",
+                              table.rows(), needed, longest,
+                              thinned ? "a smaller --decimate helps" : "a shorter --smooth helps"));
 }
 
 // The rows of `table` at least `settle_seconds` after the pipeline's (re)start.

@@ -1,0 +1,77 @@
+// Unclear messages from issue 18, each said for what it is: an empty list item, one gyro
+// column twice, a decimation that leaves too few samples, a CR-only or UTF-16 file, and
+// nlohmann's exception tags in model-file errors.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+
+#include "../support/temp_dir.hpp"
+
+namespace thermodrift::testing {
+namespace {
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+class ClearMessages : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_EQ(run_thermodrift(dir_, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
+  }
+  // Runs `arguments`, expects `status`, one line on stderr holding `part`, and no m.json.
+  void expect_refused(const std::string& arguments, int status, const std::string& part) {
+    SCOPED_TRACE(arguments);
+    const auto result = run_thermodrift(dir_, arguments);
+    EXPECT_EQ(result.status, status) << result.err;
+    EXPECT_TRUE(contains(result.err, part)) << result.err;
+    EXPECT_EQ(split_lines(result.err).size(), 1u) << result.err;
+    EXPECT_FALSE(contains(result.err, "[json.exception")) << result.err;
+    EXPECT_FALSE(std::filesystem::exists(dir_.file("m.json")));
+  }
+  TempDir dir_;
+};
+
+TEST_F(ClearMessages, EmptyListItemsAndAGyroColumnTwice) {
+  const std::string fit = "fit --data log.csv --temp temp_x --model linear --out m.json ";
+  expect_refused(fit + "--gyro gyro_x --features ,", 2, "--features: expected names separated by single commas, not ','");
+  expect_refused(fit + "--gyro gyro_x,,gyro_y", 2, "--gyro: expected names separated by single commas, not 'gyro_x,,gyro_y'");
+  expect_refused(fit + "--gyro gyro_x,gyro_x", 2, "--gyro names column gyro_x twice ('gyro_x' and 'gyro_x')");
+  expect_refused(fit + "--gyro gyro_x,6", 2, "--gyro names column gyro_x twice ('gyro_x' and '6')");
+  EXPECT_EQ(run_thermodrift(dir_, fit + "--gyro gyro_x --gyro gyro_y").status, 0);  // one flag per column still works
+}
+
+TEST_F(ClearMessages, ADecimationThatLeavesTooFewSamplesSaysSo) {
+  expect_refused("fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json --decimate 100000", 3,
+                 "keeping one ready sample in 100000: 1 usable samples, at least 4 needed; the longest log spans "
+                 "22790 s (a smaller --decimate helps)");
+}
+
+TEST_F(ClearMessages, CrOnlyAndUtf16FilesAreNamed) {
+  const std::string log = read_file(dir_.file("log.csv"));
+  std::string cr = log;
+  std::replace(cr.begin(), cr.end(), '\n', '\r');
+  dir_.write("cr.csv", cr);
+  std::string utf16 = "\xFF\xFE";
+  for (char c : log) utf16 += std::string{c, '\0'};
+  dir_.write("u16.csv", utf16);
+  const std::string options = " --gyro gyro_x --temp temp_x --model linear --out m.json";
+  expect_refused("fit --data cr.csv" + options, 3, "cr.csv:1:86: a line ends in CR alone");
+  expect_refused("fit --data u16.csv" + options, 3, "u16.csv:1:1: a NUL byte or a UTF-16 byte-order mark");
+}
+
+TEST_F(ClearMessages, ModelFileErrorsCarryNoJsonExceptionTags) {
+  ASSERT_EQ(run_thermodrift(dir_, "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out good.json").status, 0);
+  std::string text = read_file(dir_.file("good.json"));
+  const auto at = text.find("\"gyro_unit\": \"dph\"");
+  ASSERT_NE(at, std::string::npos);
+  dir_.write("unit.json", std::string(text).replace(at, 18, "\"gyro_unit\": 5"));
+  expect_refused("evaluate --model unit.json --data log.csv", 3, "unit.json: invalid model file: type must be string, but is number");
+  const auto name = text.find("\"name\": \"gyro_x\"");
+  ASSERT_NE(name, std::string::npos);
+  dir_.write("name.json", std::string(text).replace(name, 16, "\"name\": []"));
+  expect_refused("evaluate --model name.json --data log.csv", 3, "name.json: axis 1: type must be string, but is array");
+}
+
+}  // namespace
+}  // namespace thermodrift::testing
