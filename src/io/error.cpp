@@ -18,7 +18,9 @@ std::string excerpt(std::string_view text, std::size_t limit) {
   std::size_t cut = limit;
   // Back off continuation bytes (10xxxxxx) so no character is split.
   while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
-  return std::string(text.substr(0, cut)) + "…";
+  std::string out(text.substr(0, cut));  // appended, not operator+: GCC 12 warns falsely (-Wrestrict) on that
+  out += "…";
+  return out;
 }
 
 DataError::DataError(std::string file, std::size_t line, std::size_t column,
