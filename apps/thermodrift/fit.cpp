@@ -134,6 +134,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
                          {"objective_mse", tuning["objective_mse"]}, {"optimistic", tuning["optimistic"]},
                          {"seconds", calibration.axes[a].tuning_seconds}};
     }
+    for (const auto& warning : fit_warnings(axis, calibration.axes[a].in_sample)) warn(warning);
     if (axis.envelope) {
       entry["training_envelope"] = axis.envelope->to_json();
       for (const auto& warning : axis.envelope->coverage_warnings()) warn(fmt::format("{}: {}", axis.name, warning));
@@ -185,9 +186,9 @@ Command add_fit(CLI::App& parent) {
   args->data.add_to(*app);
   app->add_option("--model", args->model, "linear, stepwise or svr")
       ->check(CLI::IsMember({"linear", "stepwise", "svr"}));
-  app->add_option("--C", args->C, "SVR penalty C")->check(kPositive);
-  app->add_option("--sigma", args->sigma, "RBF width σ, on standardized features")->check(kPositive);
-  app->add_option("--gamma", args->gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(kPositive);
+  app->add_option("--C", args->C, "SVR penalty C")->check(kModelScale);
+  app->add_option("--sigma", args->sigma, "RBF width σ, on standardized features")->check(kKernelWidth);
+  app->add_option("--gamma", args->gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(kModelScale);
   app->add_option("--epsilon", args->epsilon, "SVR tube half-width, standardized target units (libsvm -p)")
       ->check(kNonNegative);
   app->add_option("--tol", args->tolerance, "SVR stopping tolerance (libsvm -e)")->check(kPositive);

@@ -95,6 +95,13 @@ int run_report(const ReportArguments& args) {
   options.progress = progress_printer("thermodrift report", start);
   const ReportResult result = write_report(log, spec, options);
   print_report_tables(result.summary);
+  for (const auto& model : result.study.models) {
+    for (std::size_t a = 0; a < model.calibration.model.axes.size(); ++a) {
+      for (const auto& warning : fit_warnings(model.calibration.model.axes[a], model.in_sample[a])) {
+        warn(fmt::format("{} ({}): {}", model.model, model.features, warning));
+      }
+    }
+  }
   if (!result.figures_drawn) warn(result.figures_note);
   fmt::print("\nreport: {}\nsummary: {}\n", result.html_path, result.summary_path);
   return 0;

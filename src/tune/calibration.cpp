@@ -218,6 +218,24 @@ std::string cv_name(const nlohmann::json& record) {
 
 }  // namespace
 
+std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetrics& in_sample) {
+  std::vector<std::string> warnings;
+  if (const auto* svr = std::get_if<SvrModel>(&axis.model); svr != nullptr && !svr->converged) {
+    const auto& solver = axis.fit.value("solver", nlohmann::json::object());
+    warnings.push_back(fmt::format(
+        "{}: the SVR stopped at its iteration cap ({} steps) before converging: usable, not optimal; a smaller C "
+        "or a looser --tol converges",
+        axis.name, solver.value("iterations", 0L)));
+  }
+  if (in_sample.samples > 0 && in_sample.mse_after > in_sample.mse_before) {
+    warnings.push_back(fmt::format(
+        "{}: on its own training data the model leaves more drift than a constant bias correction would (MSE "
+        "{:.4g} against {:.4g} (deg/h)^2): do not compensate with it",
+        axis.name, in_sample.mse_after, in_sample.mse_before));
+  }
+  return warnings;
+}
+
 std::optional<ExpectedHeldOut> expected_held_out(const nlohmann::json& fit) {
   if (fit.contains("tuning") && fit["tuning"].value("objective", "") == "cv") {
     return ExpectedHeldOut{fit["tuning"]["objective_mse"].get<double>(),

@@ -57,5 +57,22 @@ TEST(OptionChecks, OptionsThatCannotApplyAreUsageErrors) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.csv.tmp")));
 }
 
+// An SVR stopped at its iteration cap is written (it is usable) with a warning; a C beyond
+// what a model file may hold is refused before any work.
+TEST(OptionChecks, AnUnconvergedSvrIsAWarningAndAnAbsurdCAUsageError) {
+  TempDir dir;
+  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.2 --out log.csv").status, 0);
+  const std::string fit = "fit --data log.csv --gyro gyro_x --temp temp_x --model svr --sigma 1 --out m.json --C ";
+  const auto capped = run_thermodrift(dir, fit + "1e12");
+  EXPECT_EQ(capped.status, 0) << capped.err;
+  EXPECT_NE(capped.err.find("warning: gyro_x: the SVR stopped at its iteration cap"), std::string::npos) << capped.err;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("m.json")));
+  std::filesystem::remove(dir.file("m.json"));
+  const auto absurd = run_thermodrift(dir, fit + "1e300");
+  EXPECT_EQ(absurd.status, 2);
+  EXPECT_NE(absurd.err.find("--C: expected a finite number above 0 and at most 1e12"), std::string::npos) << absurd.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
+}
+
 }  // namespace
 }  // namespace thermodrift::testing

@@ -54,6 +54,11 @@ struct CalibrationOptions {
 // True when options.terms is {"auto"}: calibrate chooses terms per axis (tune/feature_selection.hpp).
 bool chooses_features(const CalibrationOptions& options);
 
+// What a user must hear about a fitted axis, one line each (empty when nothing): an SVR
+// that stopped at its iteration cap before converging (usable, not optimal), and a model
+// that leaves more drift than it found on its own training data.
+std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetrics& in_sample);
+
 // What an axis' fit expects held out: the CV MSE (°/h)² its choices were scored by
 // (the tuned SVR's CV, else the feature search's least-squares CV) and where it comes from.
 // A selection score on the training data, so an estimate, not a held-out measurement.
