@@ -26,14 +26,16 @@ std::vector<CrossAxisResult> run_cross_axis(const ChamberLog& training, const Ch
       result.training_axes.push_back(fitted.axes[axis].name);
       append_rows(pooled, feature_table(training_logs, fitted.axes[axis].pipeline, axis, true));
     }
-    // The same hyper-parameters as the left-out axis's own SVR (tuned or fixed), so the
-    // only difference from self-regression is the data.
+    // The same hyper-parameters as the left-out axis's own SVR (tuned or fixed), used as
+    // they are, not tuned again: the only difference from self-regression is the data.
     CalibrationOptions svr_options = options;
     svr_options.model = "svr";
     if (const auto* own = std::get_if<SvrModel>(&fitted.axes[left_out].model)) {
       svr_options.svr.C = own->C;
       svr_options.svr.gamma = own->function.gamma;
       svr_options.svr.epsilon = own->epsilon;
+      svr_options.partially_linear = own->linear_part.has_value();
+      svr_options.tuning.reset();
     }
     // Tuned (large C, small σ) points can take SMO long on the pooled samples, which hold
     // two drift laws; the experiment only needs to show that one model does not fit both,
