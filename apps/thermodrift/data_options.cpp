@@ -1,5 +1,6 @@
 #include "data_options.hpp"
 #include "lists.hpp"
+#include "interrupt.hpp"
 #include "numbers.hpp"
 
 #include <fmt/format.h>
@@ -121,7 +122,7 @@ std::vector<ChamberLog> DataOptions::read(const LogSpec& spec, double warm_up_se
   if (format != "csv") throw UsageError("this command reads CSV logs only (--format csv)");
   std::vector<ChamberLog> logs;
   for (const auto& file : files) {
-    logs.push_back(read_chamber_log(file, spec));
+    logs.push_back(read_chamber_log(file, spec, interrupt_token()));
     for (const auto& warning : logs.back().warnings) warn(warning);
     if (spec.despike) {
       const ChamberLog& log = logs.back();

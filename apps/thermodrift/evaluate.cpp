@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "data_options.hpp"
+#include "interrupt.hpp"
 #include "output.hpp"
 #include "numbers.hpp"
 #include "thermodrift/error.hpp"
@@ -34,7 +35,7 @@ int run_evaluate(const EvaluateArguments& args) {
     double warm_up = 0;
     for (const auto& axis : model.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
     logs = args.data.read(args.data.spec_for(model), warm_up);
-    evaluations = evaluate_axes(model, logs, args.settle);
+    evaluations = evaluate_axes(model, logs, args.settle, interrupt_token());
     double longest = 0;
     for (const auto& axis : model.axes) longest = std::max(longest, axis.pipeline.longest_time_constant());
     if (args.settle == 0 && longest > 0) {
@@ -72,7 +73,7 @@ int run_evaluate(const EvaluateArguments& args) {
   if (logs.size() >= 2) {  // several runs: each on its own, then all together (above)
     nlohmann::json runs = nlohmann::json::array();
     for (const auto& log : logs) {
-      const auto per_run = evaluate_axes(model, {log}, args.settle);
+      const auto per_run = evaluate_axes(model, {log}, args.settle, interrupt_token());
       nlohmann::json run_axes = nlohmann::json::array();
       for (std::size_t a = 0; a < per_run.size(); ++a) {
         nlohmann::json entry = per_run[a].metrics.to_json();

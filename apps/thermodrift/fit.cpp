@@ -53,7 +53,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   options.terms = args.features;
   options.selection.method = args.identify;
   options.folds_by = parse_folds_by(args.folds_by);
-  options.selection.proceed = [] { return !interrupt_requested(); };
+  options.stop = interrupt_token();
   options.selection.threads =
       args.threads > 0 ? args.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   if (args.model == "svr") {

@@ -1,5 +1,6 @@
 #include "interrupt.hpp"
 
+#include <atomic>
 #include <csignal>
 #include <cstdlib>
 
@@ -8,12 +9,16 @@
 namespace thermodrift::cli {
 
 namespace {
-// The one piece of process-wide state: a signal handler can reach nothing else.
-volatile std::sig_atomic_t interrupted = 0;
+// The one piece of process-wide state: a signal handler can reach nothing else. Lock-free
+// atomics are safe to set from a handler.
+std::atomic<bool> interrupted{false};
+std::atomic<int> received_signal{0};
+static_assert(std::atomic<bool>::is_always_lock_free && std::atomic<int>::is_always_lock_free);
 
 extern "C" void on_interrupt(int signal_number) {
-  if (interrupted) std::_Exit(128 + signal_number);
-  interrupted = 1;
+  if (interrupted.load()) std::_Exit(128 + signal_number);
+  received_signal.store(signal_number);
+  interrupted.store(true);
 }
 }  // namespace
 
@@ -22,10 +27,13 @@ void install_interrupt_handler() {
   std::signal(SIGTERM, on_interrupt);
 }
 
-bool interrupt_requested() { return interrupted != 0; }
+StopToken interrupt_token() { return StopToken(interrupted); }
 
-void throw_if_interrupted() {
-  if (interrupted) throw Interrupted("interrupted; no output written");
+void throw_if_interrupted() { interrupt_token().throw_if_requested("work"); }
+
+int interrupted_exit_status() {
+  const int signal_number = received_signal.load();
+  return signal_number > 0 ? 128 + signal_number : static_cast<int>(ExitStatus::interrupted);
 }
 
 }  // namespace thermodrift::cli

@@ -1,13 +1,20 @@
-// Ctrl-C: the first SIGINT/SIGTERM sets a flag that long work polls, so the command
-// stops within a second through the normal error path (temporary outputs removed);
-// a second one ends the process at once.
+// Ctrl-C: the first SIGINT/SIGTERM sets a flag that every long library call reads through
+// the StopToken it is given, so the command stops within a second through the normal
+// error path (temporary outputs removed) and exits 128 + the signal's number (130 for
+// SIGINT, 143 for SIGTERM); a second signal ends the process at once.
 #pragma once
+
+#include "thermodrift/stop_token.hpp"
 
 namespace thermodrift::cli {
 
 void install_interrupt_handler();
-bool interrupt_requested();
+// The token of the flag the handler sets; a default token before install_interrupt_handler.
+StopToken interrupt_token();
 // Throws Interrupted if an interrupt was requested.
 void throw_if_interrupted();
+// The exit status of a command stopped by Interrupted: 128 + the signal received, 130
+// when the stop came from elsewhere (a callback).
+int interrupted_exit_status();
 
 }  // namespace thermodrift::cli

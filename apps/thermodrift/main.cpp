@@ -36,8 +36,8 @@ int main(int argc, char** argv) {
   try {
     return thermodrift::cli::run_selected(commands);
   } catch (const thermodrift::Interrupted& e) {
-    std::fprintf(stderr, "thermodrift: %s\n", e.what());
-    return static_cast<int>(ExitStatus::interrupted);
+    std::fprintf(stderr, "thermodrift: interrupted (%s); no output written\n", e.what());
+    return thermodrift::cli::interrupted_exit_status();
   } catch (const thermodrift::UsageError& e) {
     std::fprintf(stderr, "thermodrift: %s\n", e.what());
     return static_cast<int>(ExitStatus::usage);

@@ -5,7 +5,6 @@
 
 #include <cstdio>
 
-#include "interrupt.hpp"
 
 namespace thermodrift::cli {
 
@@ -17,7 +16,6 @@ ProgressPrinter::~ProgressPrinter() {
 }
 
 bool ProgressPrinter::tuning(std::size_t axis, std::size_t axes, const optim::Progress& progress) {
-  if (interrupt_requested()) return false;
   const auto now = std::chrono::steady_clock::now();
   const double done = (static_cast<double>(axis) + progress.fraction_done) / static_cast<double>(axes);
   const double left = done > 0.01 ? progress.elapsed_seconds / progress.fraction_done * (1 - progress.fraction_done) : 0;

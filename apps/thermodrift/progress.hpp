@@ -15,8 +15,8 @@ class ProgressPrinter {
   explicit ProgressPrinter(std::string what);
   ~ProgressPrinter();  // ends a bar with a newline
 
-  // Shows the tuning of axis `axis` of `axes`; returns false once Ctrl-C was pressed,
-  // which stops the optimizer.
+  // Shows the tuning of axis `axis` of `axes`; always true (Ctrl-C reaches the tuning
+  // through CalibrationOptions::stop).
   bool tuning(std::size_t axis, std::size_t axes, const optim::Progress& progress);
   // One line of a step outside tuning ("choosing feature terms"), ending a bar first.
   void step(std::size_t axis, std::size_t axes, const std::string& what);

@@ -359,12 +359,12 @@ bool LogSampleReader::read_time(const CsvRow& row, TimeStamp& stamp) {
   return true;
 }
 
-ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec) {
+ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec, const StopToken& stop) {
   CsvReader reader(path, spec.csv);
-  return read_chamber_log(reader, spec);
+  return read_chamber_log(reader, spec, stop);
 }
 
-ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec) {
+ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec, const StopToken& stop) {
   LogSampleReader samples(reader, spec);
   const LogColumns& columns = samples.columns();
 
@@ -377,6 +377,7 @@ ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec) {
 
   LogSample sample;
   while (auto row = samples.next(sample)) {
+    if ((log.time.size() & 0xFFF) == 0) stop.throw_if_requested("reading the log");
     log.time.push_back(sample.time);
     log.line.push_back(row->line);
     for (std::size_t a = 0; a < sample.gyro.size(); ++a) log.gyro[a].push_back(sample.gyro[a]);

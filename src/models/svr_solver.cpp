@@ -513,6 +513,7 @@ void SvrSmo::shrink() {
 }
 
 SmoSolution SvrSmo::solve() {
+  settings_.stop.throw_if_requested("SVR fit");
   SmoSolution solution;
   const long variables = 2L * size_;
   long countdown = std::min(variables, 1000L);
@@ -521,6 +522,7 @@ SmoSolution SvrSmo::solve() {
   while (iterations < settings_.max_iterations) {
     if (--countdown == 0) {
       countdown = std::min(variables, 1000L);
+      settings_.stop.throw_if_requested("SVR fit");
       if (settings_.shrinking) shrink();
     }
     Variable first, second;

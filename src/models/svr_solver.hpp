@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 
 #include "svr_kernel.hpp"
+#include "thermodrift/stop_token.hpp"
 
 namespace thermodrift::svr_detail {
 
@@ -13,6 +14,7 @@ struct SmoSettings {
   double tolerance = 1e-3;
   bool shrinking = true;
   long max_iterations = 0;
+  StopToken stop;  // asked every 1000 steps at most: throws Interrupted
 };
 
 struct SmoSolution {

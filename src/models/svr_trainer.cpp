@@ -124,6 +124,7 @@ SvrFit SvrTrainer::train(const SvrDataset& data, const Eigen::VectorXd& targets,
   settings.tolerance = options_.tolerance;
   settings.shrinking = options_.shrinking;
   settings.max_iterations = options_.max_iterations;
+  settings.stop = options_.stop;
 
   svr_detail::SmoSolution solution;
   bool warm = false;

@@ -171,6 +171,7 @@ FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_
                                  const CalibrationOptions& calibration) {
   FeatureSelectionOptions options = calibration.selection;  // its own folds, not the tuning's
   options.folds_by = calibration.folds_by;
+  options.stop = calibration.stop;
   require_samples(feature_table(logs, pipeline, axis, true), pipeline, logs, 4 * static_cast<std::size_t>(options.folds));
   if (calibration.selection_progress) calibration.selection_progress(axis, "choosing feature terms");
   if (options.method == FeatureSelectionOptions::Method::greedy) return select_features(logs, axis, pipeline, options);
@@ -289,9 +290,11 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     const Eigen::MatrixXd scaled_features = svr.scaling.features(features);
     const Eigen::VectorXd scaled_target = svr.scaling.target(kernel_target);
     SvrOptions solver = options.svr;
+    solver.stop = options.stop;
     long evaluations = 1;
     if (options.tuning) {
       SvrTuningOptions tuning = *options.tuning;
+      tuning.solver.stop = options.stop;
       if (options.tuning_progress) {
         tuning.progress = [&](const optim::Progress& progress) { return options.tuning_progress(axis, progress); };
       }
@@ -435,6 +438,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     searched = select_features_per_axis(logs, options);
   }
   for (std::size_t axis = 0; axis < first.axes(); ++axis) {
+    options.stop.throw_if_requested("calibration");
     const auto start = std::chrono::steady_clock::now();
     AxisModel axis_model;
     axis_model.name = first.gyro_names[axis];
@@ -453,7 +457,9 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
         if (options.selection_progress) options.selection_progress(axis, "judging the chosen terms by SVR");
         SvrJudgeOptions judge;
         judge.tuning = options.tuning;
+        if (judge.tuning) judge.tuning->solver.stop = options.stop;
         judge.fixed = options.svr;
+        judge.fixed.stop = options.stop;
         if (options.tuning) judge.folds = options.tuning->folds;
         judge.folds_by = options.folds_by;
         judge.min_gain = selection_options.min_gain;
@@ -533,12 +539,13 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
 }
 
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
-                                          double settle_seconds) {
+                                          double settle_seconds, const StopToken& stop) {
   std::vector<AxisEvaluation> evaluations;
   for (std::size_t axis = 0; axis < model.axes.size(); ++axis) {
     const auto& axis_model = model.axes[axis];
     FeatureTable table;
     for (const auto& log : logs) {
+      stop.throw_if_requested("evaluation");
       if (log.axes() != model.axes.size()) {
         throw DataError(log.source, 0, 0,
                         fmt::format("the model has {} axes but {} gyro columns were read",
@@ -554,8 +561,16 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
                       fmt::format("no usable samples after the {:g} s warm-up{}", axis_model.pipeline.warm_up_seconds(),
                                   settle_seconds > 0 ? fmt::format(" and {:g} s of settling", settle_seconds) : ""));
     }
+    // In blocks, so that a stop request is seen during an SVR's prediction of a long log.
+    constexpr Eigen::Index kBlock = 16384;
+    Eigen::VectorXd predicted(table.features.rows());
+    for (Eigen::Index begin = 0; begin < table.features.rows(); begin += kBlock) {
+      stop.throw_if_requested("evaluation");
+      const Eigen::Index count = std::min(kBlock, table.features.rows() - begin);
+      predicted.segment(begin, count) = axis_model.predict(table.features.middleRows(begin, count));
+    }
     AxisEvaluation evaluation;
-    evaluation.metrics = residual_metrics(table.target, axis_model.predict(table.features));
+    evaluation.metrics = residual_metrics(table.target, predicted);
     if (axis_model.envelope) evaluation.outside_envelope = tally_outside(*axis_model.envelope, table);
     evaluations.push_back(evaluation);
   }

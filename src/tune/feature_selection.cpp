@@ -140,6 +140,7 @@ class Search {
   }
 
   double cv(const Terms& terms) {
+    options_.stop.throw_if_requested("feature search");
     ++result_.candidates_scored;
     return least_squares_cv(cache_.matrix(terms), cache_.target(), result_.held_out.blocks);
   }

@@ -161,7 +161,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   result.scored_by = "least_squares";
   result.held_out = cache.blocks(options.folds, options.folds_by);
   auto score = [&](const NodeModel& model) {
-    if (options.proceed && !options.proceed()) throw Interrupted("feature identification stopped");
+    options.stop.throw_if_requested("feature identification");
     ++result.candidates_scored;
     return least_squares_cv(cache.matrix(model.terms()), y, result.held_out.blocks);
   };

@@ -11,6 +11,7 @@
 #include "thermodrift/io/csv_reader.hpp"
 #include "thermodrift/io/despike.hpp"
 #include "thermodrift/io/time_stamp.hpp"
+#include "thermodrift/stop_token.hpp"
 
 namespace thermodrift {
 
@@ -114,10 +115,10 @@ struct ChamberLog {
 };
 
 // Reads a whole log. Every malformed cell, row or time stamp is a DataError naming
-// file, line and column.
-ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec);
+// file, line and column. `stop` is asked every 4096 rows (Interrupted).
+ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec, const StopToken& stop = {});
 // The same from an open reader (a stream, say).
-ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec);
+ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec, const StopToken& stop = {});
 
 // Rows [begin, end) of a log, as a log of their own (a held-out cycle, say).
 ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end);

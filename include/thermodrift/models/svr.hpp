@@ -17,6 +17,8 @@
 
 #include <Eigen/Dense>
 
+#include "thermodrift/stop_token.hpp"
+
 namespace thermodrift {
 
 struct SvrOptions {
@@ -28,6 +30,7 @@ struct SvrOptions {
   bool shrinking = true;          // drop variables that sit at a bound from the working set (libsvm -h 1)
   long max_iterations = 400'000; // cap on SMO steps (~1 s of CPU at n = 2271, C = 1e4, γ = 100: docs/svr.md); reaching it gives SvrTermination::iteration_limit
   int threads = 1;                // threads for kernel columns inside one fit (used only for long columns)
+  StopToken stop;                 // asked at the start of a fit and every 1000 SMO steps at most: throws Interrupted
 
   // True when every field is usable; otherwise false with a one-line reason in *error.
   bool IsValid(std::string* error) const;

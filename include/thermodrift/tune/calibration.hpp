@@ -14,6 +14,7 @@
 #include "thermodrift/models/metrics.hpp"
 #include "thermodrift/models/model_file.hpp"
 #include "thermodrift/models/svr.hpp"
+#include "thermodrift/stop_token.hpp"
 #include "thermodrift/tune/feature_selection.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
@@ -30,6 +31,11 @@ struct CalibrationOptions {
   // --model svr: at most this many support vectors per axis, by the reduced set fitted at
   // the training samples (models/svr_reduce.hpp); the record is fit.compressed.
   std::optional<std::size_t> max_vectors;
+  // Cancellation of the whole calibration: calibrate and fit_model hand it to the feature
+  // search, the SVR's judgement of feature sets, the tuning and every SVR fit (replacing
+  // the token of `svr`, `tuning->solver` and `selection`), so a stop request throws
+  // Interrupted within a fraction of a second wherever the work is.
+  StopToken stop;
   // Progress of the tuning of axis `axis` (0-based); returning false stops the run.
   std::function<bool(std::size_t axis, const optim::Progress&)> tuning_progress;
   // With terms {"auto"}: the least-squares selections per axis when already made (a study
@@ -135,8 +141,9 @@ struct AxisEvaluation {
   ResidualMetrics metrics;
   std::optional<EnvelopeTally> outside_envelope;  // when the model file has an envelope
 };
+// `stop` is asked per axis and log and every 16384 predicted samples (Interrupted).
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
-                                          double settle_seconds = 0);
+                                          double settle_seconds = 0, const StopToken& stop = {});
 // Metrics on the rows of `log` from `first_row` on, the features streamed from its first
 // row: the held-out part of one continuous log, with filters and lags carried into it
 // as a running compensator carries them (they see temperatures only, never the gyro).

@@ -11,13 +11,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/stop_token.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
@@ -33,9 +33,8 @@ struct FeatureSelectionOptions {
   double min_time_constant = 15;      // s: the node's lag grid starts here, steps of √2
   double max_time_constant = 5400;    // s: and stops here or at a quarter of the training span
   std::size_t max_dynamic_terms = 3;  // thermal_node: at most one Shupe term, one memory, one second lag
-  // thermal_node: asked before each set is scored; false stops the search with Interrupted.
-  // With threads > 1 it is asked from several threads at once.
-  std::function<bool()> proceed;
+  // Asked before each set is scored (both methods): a stop request throws Interrupted.
+  StopToken stop;
   // Axes searched at once by select_features_per_axis (and so by calibrate); each axis'
   // search is independent, so the result does not depend on it.
   int threads = 1;
