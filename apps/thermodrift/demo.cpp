@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "data_options.hpp"
+#include "interrupt.hpp"
 #include "report_command.hpp"
 #include "lists.hpp"
 #include "numbers.hpp"
@@ -37,31 +38,36 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 int run_demo(const DemoArguments& args) {
   const auto start = std::chrono::steady_clock::now();
   const auto progress = progress_printer("thermodrift demo", start);
-  check_output_folder(args.out);
-  std::filesystem::create_directories(args.out);
+  StagedFolder out(args.out);
+  const StopToken stop = interrupt_token();
   sim::SimulatorOptions sim_options;
   sim_options.seed = args.seed;
   progress(fmt::format("simulating a 3-axis FOG, {} chamber cycles over {:g}..{:g} °C at {:g} °C/min, {:g} Hz",
                        sim_options.cycles, sim_options.chamber_min_c, sim_options.chamber_max_c,
                        sim_options.ramp_rate_c_per_min, sim_options.rate_hz));
   const sim::ChamberRun run = sim::simulate(sim_options);
-  const std::string log_path = (std::filesystem::path(args.out) / "chamber.csv").string();
+  stop.throw_if_requested("simulation");
+  const std::string staged_log_path = (std::filesystem::path(out.staging()) / "chamber.csv").string();
+  const std::string log_path = out.committed_path(staged_log_path);
   {
-    AtomicFile file(log_path);
+    AtomicFile file(staged_log_path);
     sim::write_csv(run, file.stream());
     file.commit();
   }
+  stop.throw_if_requested("writing the log");
   const double simulate_seconds = seconds_since(start);
   const auto read_start = std::chrono::steady_clock::now();
   LogSpec spec;
   spec.time_column = "time_s";
   spec.gyro_columns = {"gyro_x", "gyro_y", "gyro_z"};
   spec.temperature_columns = {"temp_x", "temp_y", "temp_z"};
-  const ChamberLog log = read_chamber_log(log_path, spec);
+  ChamberLog log = read_chamber_log(staged_log_path, spec);
+  log.source = log_path;  // as the report and the model files name it
   progress(fmt::format("wrote and read {} ({} rows)", log_path, log.rows()));
 
   ReportOptions options;
-  options.out_dir = args.out;
+  options.out_dir = out.staging();
+  options.study.calibration.stop = stop;
   options.seed = args.seed;
   options.threads = args.threads;
   options.study.calibration.svr.threads = args.threads;
@@ -85,9 +91,11 @@ int run_demo(const DemoArguments& args) {
   options.progress = progress;
   // The default split would be the last 30 %; the demo holds out the whole second cycle.
   ReportResult result = write_report(log, spec, options);
+  out.commit();
   print_report_tables(result.summary);
   if (!result.figures_drawn) fmt::print(stderr, "thermodrift demo: warning: {}\n", result.figures_note);
-  fmt::print("\nlog:     {}\nreport:  {}\nsummary: {}\n", log_path, result.html_path, result.summary_path);
+  fmt::print("\nlog:     {}\nreport:  {}\nsummary: {}\n", log_path, out.committed_path(result.html_path),
+             out.committed_path(result.summary_path));
   progress("done");
   return 0;
 }

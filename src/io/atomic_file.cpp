@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <streambuf>
 
 #include "thermodrift/error.hpp"
@@ -217,6 +218,76 @@ void write_file_atomically(const std::string& path, const std::string& text,
   AtomicFile file(path, inputs);
   file.stream() << text;
   file.commit();
+}
+
+namespace {
+
+// DIR without a trailing separator ("out/" names the folder "out").
+fs::path folder_path(const std::string& folder) {
+  fs::path path = fs::path(folder).lexically_normal();
+  if (!path.has_filename() && path.has_parent_path()) path = path.parent_path();
+  return path;
+}
+
+// Writes every file under `from` to the same place under `to`, each under AtomicFile's rule.
+void write_tree(const fs::path& from, const fs::path& to) {
+  fs::create_directories(to);
+  for (const auto& entry : fs::directory_iterator(from)) {
+    const fs::path target = to / entry.path().filename();
+    if (entry.is_directory()) {
+      write_tree(entry.path(), target);
+      continue;
+    }
+    std::ifstream in(entry.path(), std::ios::binary);
+    AtomicFile out(target.string());
+    out.stream() << in.rdbuf();
+    if (!in) throw Error(fmt::format("cannot read {}", entry.path().string()));
+    out.commit();
+  }
+}
+
+}  // namespace
+
+StagedFolder::StagedFolder(std::string folder) : folder_(std::move(folder)) {
+  check_output_folder(folder_);
+  const fs::path path = folder_path(folder_);
+  const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  // mkdir, not mkdtemp: the folder gets the permissions the umask gives a new folder,
+  // which it keeps when it is renamed to DIR.
+  for (int attempt = 0;; ++attempt) {
+    const std::string name = fmt::format(".{}.partial-{}-{}", path.filename().string(), ::getpid(), attempt);
+    staging_ = (parent / name).string();
+    if (::mkdir(staging_.c_str(), 0777) == 0) return;
+    if (errno != EEXIST || attempt == 100) {
+      const int error = errno;
+      staging_.clear();
+      throw Error(fmt::format("cannot write {}: {}", folder_, std::strerror(error)));
+    }
+  }
+}
+
+StagedFolder::~StagedFolder() {
+  if (committed_ || staging_.empty()) return;
+  std::error_code ignored;
+  fs::remove_all(staging_, ignored);
+}
+
+std::string StagedFolder::committed_path(const std::string& staged) const {
+  return (fs::path(folder_) / fs::path(staged).lexically_relative(staging_)).string();
+}
+
+void StagedFolder::commit() {
+  const fs::path path = folder_path(folder_);
+  // A folder that does not exist yet appears whole, in one rename; an existing one (or
+  // one made meanwhile: EEXIST, ENOTEMPTY) gets the files one by one.
+  if (!fs::exists(path) && ::rename(staging_.c_str(), path.c_str()) == 0) {
+    committed_ = true;
+    return;
+  }
+  write_tree(staging_, path);
+  committed_ = true;
+  std::error_code ignored;
+  fs::remove_all(staging_, ignored);
 }
 
 }  // namespace thermodrift

@@ -16,6 +16,7 @@ std::vector<CrossAxisResult> run_cross_axis(const ChamberLog& training, const Ch
   if (axes < 2) return results;
   const std::vector<ChamberLog> training_logs{training};
   for (std::size_t left_out = 0; left_out < axes; ++left_out) {
+    options.stop.throw_if_requested("cross-axis experiment");  // and every fit below
     const auto start = std::chrono::steady_clock::now();
     CrossAxisResult result;
     result.left_out = left_out;

@@ -1,13 +1,24 @@
 // gnuplot SVG figures of the report. Data files are decimated to a few thousand points per
 // series: the figures show shape, the tables carry the numbers.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <optional>
 #include <sstream>
+#include <thread>
+#include <vector>
 
 #include "report_parts.hpp"
 #include "thermodrift/error.hpp"
@@ -29,10 +40,62 @@ std::string quote(const std::string& text) {
   return out + "'";
 }
 
-std::string shell_quote(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
+// `program` as the shell's `command -v` finds it: a name with a slash as given, else the
+// first executable file of that name in $PATH.
+std::optional<std::string> find_program(const std::string& program) {
+  const auto executable = [](const std::string& path) {
+    struct stat status {};
+    return ::stat(path.c_str(), &status) == 0 && S_ISREG(status.st_mode) && ::access(path.c_str(), X_OK) == 0;
+  };
+  if (program.find('/') != std::string::npos) {
+    return executable(program) ? std::optional<std::string>(program) : std::nullopt;
+  }
+  const char* path = std::getenv("PATH");
+  std::istringstream folders(path ? path : "/usr/local/bin:/usr/bin:/bin");
+  for (std::string folder; std::getline(folders, folder, ':');) {
+    const std::string candidate = (std::filesystem::path(folder.empty() ? "." : folder) / program).string();
+    if (executable(candidate)) return candidate;
+  }
+  return std::nullopt;
+}
+
+// Runs `program figures/figures.gp` in `dir`, its stdout and stderr to figures/gnuplot.log,
+// and waits for it, asking `stop` every 10 ms: a stop request ends it (SIGTERM) and throws
+// Interrupted. Not std::system, which ignores SIGINT in this process while the child runs:
+// a Ctrl-C during the figures would be lost. Returns the exit status, -1 if it did not exit.
+int run_gnuplot(const std::string& program, const std::string& dir, const StopToken& stop) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addchdir_np(&actions, dir.c_str());
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "figures/gnuplot.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t defaults;  // the CLI ignores SIGPIPE; gnuplot gets the usual dispositions
+  sigemptyset(&defaults);
+  for (const int number : {SIGPIPE, SIGINT, SIGTERM}) sigaddset(&defaults, number);
+  posix_spawnattr_setsigdefault(&attributes, &defaults);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF);
+  std::string script = "figures/figures.gp";
+  std::vector<char*> argv{const_cast<char*>(program.c_str()), script.data(), nullptr};
+  pid_t child = 0;
+  const int spawned = ::posix_spawn(&child, program.c_str(), &actions, &attributes, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
+  if (spawned != 0) throw Error(fmt::format("cannot run {}: {}", program, std::strerror(spawned)));
+  int raw = 0;
+  for (;;) {
+    const pid_t done = ::waitpid(child, &raw, WNOHANG);
+    if (done == child) break;
+    if (done < 0 && errno != EINTR) throw Error(fmt::format("waiting for {}: {}", program, std::strerror(errno)));
+    if (stop.stop_requested()) {
+      ::kill(child, SIGTERM);
+      ::waitpid(child, &raw, 0);
+      stop.throw_if_requested("figures");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
 }
 
 // gnuplot's enhanced text treats _ ^ @ & { } as markup; in a single-quoted string one
@@ -71,10 +134,12 @@ std::string safe_file_name(const std::string& name) {
   return out.empty() ? std::string("axis") : out;
 }
 
-FigureOutcome draw_figures(const FigureInputs& in, const std::string& dir, const std::string& gnuplot) {
+FigureOutcome draw_figures(const FigureInputs& in, const std::string& dir, const std::string& gnuplot,
+                           const StopToken& stop) {
   namespace fs = std::filesystem;
   FigureOutcome outcome;
-  if (std::system(fmt::format("command -v {} > /dev/null 2>&1", shell_quote(gnuplot)).c_str()) != 0) {
+  const auto program = find_program(gnuplot);
+  if (!program) {
     outcome.note = fmt::format("'{}' is not installed, so the report has no figures (apt-get install gnuplot-nox)", gnuplot);
     return outcome;
   }
@@ -83,6 +148,7 @@ FigureOutcome draw_figures(const FigureInputs& in, const std::string& dir, const
   const ChamberLog& log = *in.log;
   Script script;
   const auto data = [&](const std::string& name, const std::string& text) {
+    stop.throw_if_requested("figures");
     write_file_atomically((data_dir / name).string(), text);
     return quote("figures/" + name);
   };
@@ -270,10 +336,7 @@ FigureOutcome draw_figures(const FigureInputs& in, const std::string& dir, const
   const std::string script_path = (data_dir / "figures.gp").string();
   write_file_atomically(script_path, script.text.str());
   const std::string log_path = (data_dir / "gnuplot.log").string();
-  const std::string command = fmt::format("cd {} && {} figures/figures.gp > figures/gnuplot.log 2>&1", shell_quote(dir),
-                                          shell_quote(gnuplot));
-  const int raw = std::system(command.c_str());
-  const int status = (raw != -1 && WIFEXITED(raw)) ? WEXITSTATUS(raw) : -1;
+  const int status = run_gnuplot(*program, dir, stop);
   if (status != 0) {
     throw Error(fmt::format("gnuplot failed (exit status {}) on {}; see {}", status, script_path, log_path));
   }

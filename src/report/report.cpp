@@ -125,6 +125,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     if (options.progress) options.progress(line);
   };
   std::vector<std::pair<std::string, double>> timings = options.earlier_steps;
+  const StopToken& stop = options.study.calibration.stop;
 
   ReportResult result;
   StudyOptions study_options = options.study;
@@ -164,6 +165,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   const double sample_rate = 1.0 / median_interval(log);
   for (const auto& m : study.models) figures.model_labels.push_back(model_label(m, 0));
   for (std::size_t a = 0; a < axes; ++a) {
+    stop.throw_if_requested("compensation and Allan deviation");
     const auto& pipeline = study.models.front().calibration.model.axes[a].pipeline;
     const FeatureTable table = feature_table({log}, pipeline, a, false);
     AxisTrace trace;
@@ -202,6 +204,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
       }
     }
   }
+  stop.throw_if_requested("report");
   for (const auto& m : study.models) {
     save_drift_model(m.calibration.model, (fs::path(options.out_dir) / ("model_" + m.model + ".json")).string());
   }
@@ -209,12 +212,13 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
 
   say("drawing the figures with gnuplot");
   start = Clock::now();
-  FigureOutcome drawn = draw_figures(figures, options.out_dir, options.gnuplot);
+  FigureOutcome drawn = draw_figures(figures, options.out_dir, options.gnuplot, stop);
   result.figures_drawn = drawn.drawn;
   result.figures_note = drawn.note;
   timings.emplace_back("figures (gnuplot)", seconds_since(start));
 
   // The summary: every number the page shows.
+  stop.throw_if_requested("report");
   start = Clock::now();
   nlohmann::json summary;
   summary["title"] = options.title;

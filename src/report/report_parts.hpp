@@ -8,6 +8,7 @@
 
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/report/allan.hpp"
+#include "thermodrift/stop_token.hpp"
 
 namespace thermodrift::report_detail {
 
@@ -59,8 +60,10 @@ struct FigureOutcome {
 };
 
 // Writes DIR/figures/*.dat and DIR/figures/figures.gp and runs gnuplot in DIR. Returns
-// drawn = false with a note when gnuplot is not installed; throws Error when it fails.
-FigureOutcome draw_figures(const FigureInputs& inputs, const std::string& dir, const std::string& gnuplot);
+// drawn = false with a note when gnuplot is not installed; throws Error when it fails,
+// Interrupted (gnuplot ended) when `stop` asks while it writes or gnuplot runs.
+FigureOutcome draw_figures(const FigureInputs& inputs, const std::string& dir, const std::string& gnuplot,
+                           const StopToken& stop);
 
 // The page, from the summary (so the page shows exactly summary.json's numbers).
 std::string render_html(const nlohmann::json& summary, const FigureOutcome& figures, const std::string& dir);

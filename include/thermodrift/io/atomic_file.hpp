@@ -61,6 +61,32 @@ void refuse_overwriting_inputs(const std::string& output, const std::vector<std:
 // folder outputs such as `report --out DIR`; the files in it go through AtomicFile).
 void check_output_folder(const std::string& folder);
 
+// A folder output (`report --out DIR`, `demo`) that appears whole or not at all. Its files
+// are written into a staging folder beside DIR (.DIR.partial-XXXXXX, same file system);
+// commit() renames that folder to DIR when DIR did not exist, or else writes each file
+// into DIR under the rule above (replacing files of the same name, keeping the others).
+// Without commit() — an error, an interrupt — the destructor removes the staging folder,
+// so DIR is left as it was: not created, no new or half-written files in it.
+class StagedFolder {
+ public:
+  // Throws UsageError as check_output_folder, Error if the staging folder cannot be made.
+  explicit StagedFolder(std::string folder);
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+  ~StagedFolder();
+
+  const std::string& staging() const { return staging_; }  // where to write the files
+  const std::string& folder() const { return folder_; }    // where they end up
+  // Where `staged`, a path inside staging(), is after commit().
+  std::string committed_path(const std::string& staged) const;
+  void commit();
+
+ private:
+  std::string folder_;
+  std::string staging_;
+  bool committed_ = false;
+};
+
 // Writes `text` to `path` under the rule above.
 void write_file_atomically(const std::string& path, const std::string& text,
                            const std::vector<std::string>& inputs = {});

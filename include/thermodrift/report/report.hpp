@@ -23,8 +23,12 @@
 namespace thermodrift {
 
 struct ReportOptions {
-  StudyOptions study;                      // models, calibration settings, split, progress
-  std::string out_dir;                     // created if missing; outputs are replaced whole
+  // Models, calibration settings, split, progress; study.calibration.stop also stops the
+  // report's own steps (the cross-axis fits, compensation, figures, gnuplot).
+  StudyOptions study;
+  // Created if missing; each file is replaced whole, but an error or a stop can leave some
+  // files written and others not: the CLI writes into a StagedFolder's staging folder.
+  std::string out_dir;
   std::string title = "thermodrift report";
   std::string command_line;                // how the report was asked for (shown on the page)
   // True drift per axis and log row (°/h), when known (simulated data): gives the noise

@@ -215,5 +215,51 @@ TEST(AtomicFile, OutputFolderMustBeAFolder) {
   EXPECT_NO_THROW(check_output_folder(dir.file("not-yet")));
 }
 
+// Writes a report-like tree (a file and one in a subfolder) into the staging folder.
+void stage_two_files(const StagedFolder& out) {
+  fs::create_directory(fs::path(out.staging()) / "figures");
+  write_file_atomically((fs::path(out.staging()) / "report.html").string(), "new page");
+  write_file_atomically((fs::path(out.staging()) / "figures" / "raw.dat").string(), "1 2\n");
+}
+
+TEST(StagedFolder, NewFolderAppearsWholeOnCommitAndNotAtAllWithout) {
+  TempDir dir;
+  {
+    StagedFolder out(dir.file("report/"));
+    stage_two_files(out);
+    EXPECT_EQ(dir.entries(), std::vector<std::string>{fs::path(out.staging()).filename().string()});
+  }
+  EXPECT_TRUE(dir.entries().empty()) << "no commit: nothing left";
+  StagedFolder out(dir.file("report"));
+  stage_two_files(out);
+  EXPECT_EQ(out.committed_path((fs::path(out.staging()) / "figures" / "raw.dat").string()),
+            (dir.path() / "report" / "figures" / "raw.dat").string());
+  out.commit();
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"report"});
+  EXPECT_EQ(read_file(dir.file("report/report.html")), "new page");
+  EXPECT_EQ(read_file(dir.file("report/figures/raw.dat")), "1 2\n");
+}
+
+TEST(StagedFolder, ExistingFolderGetsItsFilesReplacedAndKeepsTheOthers) {
+  TempDir dir;
+  fs::create_directory(dir.path() / "report");
+  dir.write("report/report.html", "old page");
+  dir.write("report/notes.txt", "mine");
+  {
+    StagedFolder out(dir.file("report"));
+    stage_two_files(out);
+  }
+  EXPECT_EQ(read_file(dir.file("report/report.html")), "old page") << "no commit: the folder as it was";
+  EXPECT_FALSE(fs::exists(dir.path() / "report" / "figures"));
+  StagedFolder out(dir.file("report"));
+  stage_two_files(out);
+  out.commit();
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"report"}) << "the staging folder is gone";
+  EXPECT_EQ(read_file(dir.file("report/report.html")), "new page");
+  EXPECT_EQ(read_file(dir.file("report/notes.txt")), "mine");
+  EXPECT_EQ(read_file(dir.file("report/figures/raw.dat")), "1 2\n");
+  EXPECT_THROW(StagedFolder(dir.file("report/notes.txt")), UsageError);
+}
+
 }  // namespace
 }  // namespace thermodrift
