@@ -562,7 +562,7 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
                                   settle_seconds > 0 ? fmt::format(" and {:g} s of settling", settle_seconds) : ""));
     }
     // In blocks, so that a stop request is seen during an SVR's prediction of a long log.
-    constexpr Eigen::Index kBlock = 16384;
+    constexpr Eigen::Index kBlock = 4096;
     Eigen::VectorXd predicted(table.features.rows());
     for (Eigen::Index begin = 0; begin < table.features.rows(); begin += kBlock) {
       stop.throw_if_requested("evaluation");

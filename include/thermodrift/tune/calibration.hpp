@@ -141,7 +141,7 @@ struct AxisEvaluation {
   ResidualMetrics metrics;
   std::optional<EnvelopeTally> outside_envelope;  // when the model file has an envelope
 };
-// `stop` is asked per axis and log and every 16384 predicted samples (Interrupted).
+// `stop` is asked per axis and log and every 4096 predicted samples (Interrupted).
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                           double settle_seconds = 0, const StopToken& stop = {});
 // Metrics on the rows of `log` from `first_row` on, the features streamed from its first
