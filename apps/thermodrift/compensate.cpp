@@ -104,9 +104,10 @@ int run_compensate(const CompensateArguments& args) {
   std::size_t not_ready_rows = 0;
   LogSample sample;
   std::string line;
+  const StopToken stop = interrupt_token();
   // The echoed row is the file's text: times relative to the first row never reach it.
   while (auto row = samples.next(sample)) {
-    if ((samples.rows() & 0xFFF) == 1) throw_if_interrupted();
+    if ((samples.rows() & 0xFFF) == 1) stop.throw_if_requested("compensation");
     for (std::size_t c = 0; c < inputs; ++c) temperatures[c] = sample.temperature[shared ? 0 : c];
     const auto& result = compensator.push(sample.time, sample.gyro, temperatures);
     if (!result.ready) ++not_ready_rows;

@@ -29,8 +29,6 @@ void install_interrupt_handler() {
 
 StopToken interrupt_token() { return StopToken(interrupted); }
 
-void throw_if_interrupted() { interrupt_token().throw_if_requested("work"); }
-
 int interrupted_exit_status() {
   const int signal_number = received_signal.load();
   return signal_number > 0 ? 128 + signal_number : static_cast<int>(ExitStatus::interrupted);

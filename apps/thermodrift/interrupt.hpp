@@ -11,8 +11,6 @@ namespace thermodrift::cli {
 void install_interrupt_handler();
 // The token of the flag the handler sets; a default token before install_interrupt_handler.
 StopToken interrupt_token();
-// Throws Interrupted if an interrupt was requested.
-void throw_if_interrupted();
 // The exit status of a command stopped by Interrupted: 128 + the signal received, 130
 // when the stop came from elsewhere (a callback).
 int interrupted_exit_status();
