@@ -11,6 +11,7 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/features/moving_average.hpp"
 #include "thermodrift/features/terms.hpp"
+#include "thermodrift/io/chamber_log.hpp"
 
 namespace thermodrift {
 
@@ -350,9 +351,10 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       " * increase, restarts the warm-up. Ring buffers are sized for {rate} Hz: a device that\n"
       " * samples faster drops the oldest sample of a full ring, counts it in\n"
       " * state.dropped_samples and returns 0 for that step (never writes out of bounds).\n"
-      " * A sample with a non-finite time, gyro or temperature (a failed read) is rejected\n"
-      " * whole: step leaves the state as it was, writes NAN, counts it in\n"
-      " * state.rejected_samples and returns 0. An output that is not finite returns 0.\n"
+      " * A sample with a non-finite time, gyro or temperature, a gyro beyond +-3.6e8 deg/h or a\n"
+      " * temperature beyond -273.15..1000 degC (a failed read; the ranges thermodrift reads\n"
+      " * logs with) is rejected whole: step leaves the state as it was, writes NAN, counts\n"
+      " * it in state.rejected_samples and returns 0. An output that is not finite returns 0.\n"
       " *\n"
       " * Model size ({precision}):\n",
       fmt::arg("p", p), fmt::arg("source", options.source.empty() ? "" : " from " + comment_safe(options.source)),
@@ -422,7 +424,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       "  {p}_axis_state axis[{P}_AXES];\n"
       "  {p}_real drift[{P}_AXES];         /* last predicted drift per axis, deg/h */\n"
       "  unsigned long dropped_samples;   /* ring overflows: the device sampled faster than {P}_MAX_RATE_HZ */\n"
-      "  unsigned long rejected_samples;  /* samples with a non-finite input, rejected whole */\n"
+      "  unsigned long rejected_samples;  /* samples with a non-finite or implausible input, rejected whole */\n"
       "}} {p}_state;\n\n"
       "typedef struct {{\n"
       "  double smooth_seconds;\n"
@@ -795,17 +797,22 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
   }
   out += fmt::format(
       "  {{\n"
-      "    int finite = isfinite(time);\n"
+      "    /* false for NaN and infinities too */\n"
+      "    int plausible = isfinite(time);\n"
       "    int k;\n"
-      "    for (k = 0; k < {P}_AXES; ++k) finite = finite && isfinite(gyro[k]);\n"
-      "    for (k = 0; k < {P}_TEMPERATURES; ++k) finite = finite && isfinite(temperature[k]);\n"
-      "    if (!finite) {{  /* a failed read: rejected whole, the state left as it was */\n"
+      "    for (k = 0; k < {P}_AXES; ++k) plausible = plausible && gyro[k] >= {min_rate} && gyro[k] <= {max_rate};\n"
+      "    for (k = 0; k < {P}_TEMPERATURES; ++k) {{\n"
+      "      plausible = plausible && temperature[k] >= {min_t} && temperature[k] <= {max_t};\n"
+      "    }}\n"
+      "    if (!plausible) {{  /* a failed read: rejected whole, the state left as it was */\n"
       "      for (k = 0; k < {P}_AXES; ++k) compensated[k] = NAN;\n"
       "      ++state->rejected_samples;\n"
       "      return 0;\n"
       "    }}\n"
       "  }}\n",
-      fmt::arg("P", P));
+      fmt::arg("P", P), fmt::arg("min_rate", Literal(false)(-kMaxRateDph)),
+      fmt::arg("max_rate", Literal(false)(kMaxRateDph)), fmt::arg("min_t", Literal(false)(kMinTemperatureC)),
+      fmt::arg("max_t", Literal(false)(kMaxTemperatureC)));
   for (std::size_t a = 0; a < axes; ++a) {
     const auto& terms = model.axes[a].pipeline.terms;
     // In float the pipeline runs on T - reference, rounded once from double: smaller

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/chamber_log.hpp"
 
 namespace thermodrift {
 
@@ -29,12 +30,15 @@ void Compensator::reset() {
 
 const Compensator::Output& Compensator::push(double time, std::span<const double> gyro,
                                              std::span<const double> temperatures) {
-  // A sample with a non-finite input (a failed sensor read) is rejected whole: it would
-  // stay in the running sums and lag states for good. The state is left as it was.
-  bool finite = std::isfinite(time);
-  for (std::size_t a = 0; a < streams_.size(); ++a) finite = finite && std::isfinite(gyro[a]);
-  for (std::size_t c = 0; c < model_.temperature_inputs(); ++c) finite = finite && std::isfinite(temperatures[c]);
-  if (!finite) {
+  // A sample with a non-finite input, or one beyond the physical ranges a log is read with
+  // (a failed sensor read, a corrupted word), is rejected whole: it would stay in the
+  // running sums and lag states for good. The state is left as it was.
+  bool plausible = std::isfinite(time);
+  for (std::size_t a = 0; a < streams_.size(); ++a) plausible = plausible && plausible_rate(gyro[a]);
+  for (std::size_t c = 0; c < model_.temperature_inputs(); ++c) {
+    plausible = plausible && plausible_temperature(temperatures[c]);
+  }
+  if (!plausible) {
     ++rejected_;
     for (std::size_t a = 0; a < streams_.size(); ++a) {
       drift_[a] = compensated_[a] = std::numeric_limits<double>::quiet_NaN();

@@ -318,7 +318,7 @@ bool LogSampleReader::read(const CsvRow& row, LogSample& sample) {
 // raw-count log read with its scale passes.
 void LogSampleReader::check_physical_range(const CsvRow& row, const LogSample& sample) const {
   for (std::size_t a = 0; a < sample.gyro.size(); ++a) {
-    if (std::abs(sample.gyro[a]) <= kMaxRateDph) continue;
+    if (plausible_rate(sample.gyro[a])) continue;
     throw DataError(reader_.path(), row.line, columns_.gyro[a] + 1,
                     fmt::format("gyro '{}' is {:.4g} °/h, beyond the physical range of ±{:.4g} °/h (10^5 °/s): "
                                 "check --gyro-unit and --gyro-scale",
@@ -326,7 +326,7 @@ void LogSampleReader::check_physical_range(const CsvRow& row, const LogSample& s
   }
   for (std::size_t c = 0; c < sample.temperature.size(); ++c) {
     const double t = sample.temperature[c];
-    if (t >= kMinTemperatureC && t <= kMaxTemperatureC) continue;
+    if (plausible_temperature(t)) continue;
     throw DataError(reader_.path(), row.line, columns_.temperature[c] + 1,
                     fmt::format("temperature '{}' is {:.4g} °C, beyond the physical range of {} to {} °C: "
                                 "check --temp-scale and --temp-offset",

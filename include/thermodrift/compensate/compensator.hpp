@@ -38,13 +38,15 @@ class Compensator {
 
   // `gyro` in °/h, one per axis; `temperatures`, one per axis then the model's extra
   // channels (model().temperature_inputs() in all). `time` must increase. A sample with
-  // any non-finite input is rejected (counted in rejected()): not ready, drift and
+  // any non-finite input, a temperature beyond -273.15..1000 °C or a rate beyond
+  // ±3.6e8 °/h (plausible_temperature, plausible_rate: the ranges a log is read with)
+  // is rejected (counted in rejected()): not ready, drift and
   // compensated NaN, the state untouched; an axis whose output is not finite is not ready.
   // During warm-up the drift is predicted from the history there is (a partial window,
   // a shorter rate span): the best causal estimate, flagged by ready = false.
   const Output& push(double time, std::span<const double> gyro, std::span<const double> temperatures);
   void reset();
-  std::size_t rejected() const { return rejected_; }  // samples with a non-finite input
+  std::size_t rejected() const { return rejected_; }  // samples with a non-finite or implausible input
 
  private:
   DriftModel model_;

@@ -29,6 +29,13 @@ inline constexpr double kMinTemperatureC = -273.15;  // absolute zero
 inline constexpr double kMaxTemperatureC = 1000;
 inline constexpr double kMaxRateDph = 3.6e8;  // |rate|: 10^5 °/s
 
+// Within those ranges (false for NaN and infinities): the reader's test of a cell, and the
+// field code's (Compensator, the exported header) test of a sample it is handed.
+inline constexpr bool plausible_temperature(double celsius) {
+  return celsius >= kMinTemperatureC && celsius <= kMaxTemperatureC;
+}
+inline constexpr bool plausible_rate(double dph) { return dph >= -kMaxRateDph && dph <= kMaxRateDph; }
+
 // Raw log values to the library's units: °C = temperature_scale·raw + temperature_offset,
 // °/h = degrees_per_hour(gyro_unit)·gyro_scale·raw. Each list holds one value for every
 // column or one per column, in the order the columns are named; empty means the default

@@ -367,14 +367,21 @@ SpoiledRuns run_spoiled(const DriftModel& model, const ChamberLog& spoiled, cons
           run_compensator(model, clean)};
 }
 
-// Failed sensor reads (NaN, inf) in the field: the sample is rejected whole, never flagged
-// ready, and the state goes on as if it had not come; the header does as the compensator.
-TEST_F(CExport, NonFiniteInputsAreRejectedWholeLikeTheCompensator) {
+// Failed sensor reads in the field (NaN, inf, or a finite value beyond the physical ranges
+// a log is read with: a corrupted word): the sample is rejected whole, never flagged ready,
+// and the state goes on as if it had not come; the header does as the compensator.
+TEST_F(CExport, ImplausibleInputsAreRejectedWholeLikeTheCompensator) {
   ChamberLog bad = *log_;
-  const std::vector<std::size_t> rejected = {500, 900, 1300};
+  const std::vector<std::size_t> rejected = {500, 900, 1300, 1700, 1701, 2100, 2300};
   bad.temperature[0][500] = std::numeric_limits<double>::quiet_NaN();
   bad.gyro[1][900] = std::numeric_limits<double>::quiet_NaN();
   bad.temperature[2][1300] = std::numeric_limits<double>::infinity();
+  bad.gyro[0][1700] = 1.01 * kMaxRateDph;
+  bad.gyro[2][1701] = -1e300;
+  bad.temperature[1][2100] = kMinTemperatureC - 0.01;
+  bad.temperature[0][2300] = 1e300;
+  // The edges of the ranges are readings: kept.
+  bad.gyro[0][2500] = bad.gyro[0][2500] > 0 ? kMaxRateDph : -kMaxRateDph;
   const auto [c, cpp, clean] = run_spoiled(*svr_, bad, *log_);
   ASSERT_EQ(c.ready.size(), bad.rows());
   EXPECT_EQ(c.ready, cpp.ready);
@@ -398,14 +405,14 @@ TEST_F(CExport, NonFiniteInputsAreRejectedWholeLikeTheCompensator) {
   EXPECT_EQ(cpp.ready[3000], 1);
 }
 
-// One huge finite temperature that reaches the field code (the header has no file check)
-// spoils only the samples whose window and rate span hold it: the running sum is re-added
-// when it leaves, in C++ and in the header alike.
+// One huge temperature that is still a reading (the hot end of the range, 1000 °C, after
+// -40 °C) spoils only the samples whose window and rate span hold it: the running sum is
+// re-added when it leaves, in C++ and in the header alike.
 TEST_F(CExport, OneHugeTemperatureDoesNotPoisonLaterSamples) {
   ChamberLog bad = *log_;
   const std::size_t at = 1500;
   ASSERT_GT(bad.rows(), at + 600);
-  bad.temperature[0][at] = 1e300;
+  bad.temperature[0][at] = kMaxTemperatureC;
   const auto [c, cpp, clean] = run_spoiled(*linear_, bad, *log_);
   ASSERT_EQ(c.ready.size(), bad.rows());
   // 1 Hz, a 100 s window and a 100 s rate span: from `at` + 200 on nothing of it is left.
