@@ -93,7 +93,7 @@ Command add_compress(CLI::App& parent) {
       "compress", "each SVR axis as at most K support vectors (a reduced set), for a smaller, faster model");
   app->add_option("--model", args->model_file, "model file written by fit")->required()->check(CLI::ExistingFile);
   app->add_option("--max-vectors", args->max_vectors, "K: support vectors per SVR axis (default 32)")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20));
+      ->check(whole_number(1, std::size_t{1} << 20));
   args->data.add_to(*app, false);
   app->add_option("--settle", args->settle,
                   "with --data: leave the first SECONDS of each log out of the metrics, while lags settle")

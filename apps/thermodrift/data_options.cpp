@@ -50,15 +50,13 @@ void DataOptions::add_to(CLI::App& app, bool data_required) {
                  "unit of the numbers in the time column: s (default), ms, us, ns; ISO 8601 stamps are recognised "
                  "without it")
       ->check(CLI::IsMember({"s", "ms", "us", "ns"}));
-  app.add_option("--temp-scale", temperature_scale,
-                 "raw temperature to °C: °C = A·raw + B; one A for all temperature columns or one per column (default 1)")
-      ->delimiter(',');
-  app.add_option("--temp-offset", temperature_offset,
-                 "B of --temp-scale; one for all temperature columns or one per column (default 0)")
-      ->delimiter(',');
-  app.add_option("--gyro-scale", gyro_scale,
-                 "multiplies the gyro columns after --gyro-unit; one for all or one per gyro column (default 1)")
-      ->delimiter(',');
+  add_number_list_option(app, "--temp-scale", temperature_scale,
+                         "raw temperature to °C: °C = A·raw + B; one A for all temperature columns or one per column "
+                         "(default 1)");
+  add_number_list_option(app, "--temp-offset", temperature_offset,
+                         "B of --temp-scale; one for all temperature columns or one per column (default 0)");
+  add_number_list_option(app, "--gyro-scale", gyro_scale,
+                         "multiplies the gyro columns after --gyro-unit; one for all or one per gyro column (default 1)");
   smooth_option = app.add_option("--smooth", smooth, "moving-average window in seconds (default 100)")
                       ->check(kNonNegative);
   app.add_flag("--despike", despike,

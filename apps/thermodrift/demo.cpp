@@ -106,10 +106,10 @@ Command add_demo(CLI::App& parent) {
   auto args = std::make_shared<DemoArguments>();
   CLI::App* app = parent.add_subcommand("demo", "the paper's study on a simulated two-cycle chamber test, as an HTML report");
   app->add_option("--out", args->out, "folder for the log, models and report (default thermodrift-demo)");
-  app->add_option("--seed", args->seed, "simulator seed");
+  app->add_option("--seed", args->seed, "simulator seed")->check(kSeed);
   add_list_option(*app, "--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md");
   add_identify_option(*app, args->identify);
-  app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(kPositive);
+  app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(kThreads);
   return {app, [args] { return run_demo(*args); }};
 }
 

@@ -195,7 +195,7 @@ Command add_fit(CLI::App& parent) {
   app->add_option("--rate-span", args->rate_span, "span of the dT/dt difference in seconds (default: --smooth)")
       ->check(kPositive);
   app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
-      ->check(kPositive);
+      ->check(whole_number(1, 1000000000));
   add_list_option(*app, "--features", args->features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md");
   add_identify_option(*app, args->identify);
   app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
@@ -203,8 +203,8 @@ Command add_fit(CLI::App& parent) {
   app->add_option("--objective", args->objective,
                   "tuning objective: cv (blocked k-fold, default), holdout (last 30 %), train (in-sample, optimistic)")
       ->check(CLI::IsMember({"cv", "holdout", "train"}));
-  app->add_option("--evaluations", args->evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(kPositive);
-  app->add_option("--folds", args->folds, "folds of the blocked cross-validation (default 5)")->check(CLI::Range(2, 100));
+  app->add_option("--evaluations", args->evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(kEvaluations);
+  app->add_option("--folds", args->folds, "folds of the blocked cross-validation, 2 to 100 (default 5)")->check(whole_number(2, 100));
   app->add_option("--folds-by", args->folds_by,
                   "cross-validation folds of tuning and --features auto: time (default; --folds blocks in time, "
                   "over several --data files in order) or runs (with two or more --data files, one fold per "
@@ -213,10 +213,10 @@ Command add_fit(CLI::App& parent) {
   app->add_flag("--tune-epsilon", args->tune_epsilon, "tune ε as well");
   app->add_option("--max-vectors", args->max_vectors,
                   "at most K support vectors per axis: the reduced set fitted to the SVR (as compress does)")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20));
-  app->add_option("--seed", args->seed, "seed of the tuner's random choices");
+      ->check(whole_number(1, std::size_t{1} << 20));
+  app->add_option("--seed", args->seed, "seed of the tuner's random choices")->check(kSeed);
   app->add_option("--threads", args->threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")
-      ->check(kPositive);
+      ->check(kThreads);
   app->add_option("--out", args->out, "model file to write")->required();
   app->add_flag("--json", args->json, "print one JSON object on stdout");
   return {app, [args, app] { return run_fit(*args, *app); }};

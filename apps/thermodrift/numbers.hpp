@@ -5,7 +5,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <string>
 
 namespace thermodrift::cli {
@@ -41,5 +44,30 @@ inline const CLI::Validator kModelScale = detail::finite_at_least(0, true, "a fi
 inline const CLI::Validator kKernelWidth = detail::finite_at_least(1e-6, false, "a finite number of at least 1e-6", HUGE_VAL, "POSITIVE");
 // A finite number >= 0 (smoothing, settling, ε).
 inline const CLI::Validator kNonNegative = detail::finite_at_least(0, false, "a finite number of 0 or more");
+
+// A whole number in [low, high], in decimal digits only. CLI11 took `--seed -1` and
+// `--seed 18446744073709551616` as some other seed without a word, and answered
+// `--decimate 1e9` with "Could not convert".
+// (Unnamed: the help shows the option's type, the message the range.)
+inline CLI::Validator whole_number(std::uint64_t low, std::uint64_t high) {
+  const std::string expected = "a whole number from " + std::to_string(low) + " to " + std::to_string(high);
+  return CLI::Validator(
+      [low, high, expected](std::string& text) -> std::string {
+        std::uint64_t value = 0;
+        const char* end = text.data() + text.size();
+        const auto [stop, error] = std::from_chars(text.data(), end, value);
+        if (text.empty() || stop != end || error != std::errc{} || value < low || value > high) {
+          return "expected " + expected + ", not '" + text + "'";
+        }
+        return {};
+      },
+      "");
+}
+
+// Seeds: any 64-bit unsigned number.
+inline const CLI::Validator kSeed = whole_number(0, std::numeric_limits<std::uint64_t>::max());
+// Worker threads, and tuning budgets: what a navigation lab's machine could use.
+inline const CLI::Validator kThreads = whole_number(1, 1024);
+inline const CLI::Validator kEvaluations = whole_number(1, 1000000);
 
 }  // namespace thermodrift::cli

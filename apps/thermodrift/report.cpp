@@ -158,12 +158,12 @@ Command add_report(CLI::App& parent) {
   app->add_option_function<double>("--split-time", [args](double s) { args->split_time = s; },
                                    "hold out the log from this time (s) on")
       ->excludes(fraction);
-  app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)");
+  app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)")->check(kSeed);
   add_list_option(*app, "--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md");
   add_identify_option(*app, args->identify);
-  app->add_option("--threads", args->threads, "threads for the SVR fits")->check(kPositive);
+  app->add_option("--threads", args->threads, "threads for the SVR fits")->check(kThreads);
   app->add_option("--evaluations", args->evaluations, "AFSA budget of objective evaluations per axis (default 100)")
-      ->check(kPositive);
+      ->check(kEvaluations);
   return {app, [args] { return run_report(*args); }};
 }
 

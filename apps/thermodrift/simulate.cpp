@@ -52,8 +52,8 @@ Command add_simulate(CLI::App& parent) {
   auto args = std::make_shared<SimulateArguments>();
   CLI::App* app = parent.add_subcommand("simulate", "simulate a 3-axis FOG chamber test with known true drift");
   app->add_option("--out", args->out, "CSV file to write")->required();
-  app->add_option("--seed", args->options.seed, "seed of every noise stream");
-  app->add_option("--cycles", args->options.cycles, "number of chamber cycles")->check(kPositive);
+  app->add_option("--seed", args->options.seed, "seed of every noise stream")->check(kSeed);
+  app->add_option("--cycles", args->options.cycles, "number of chamber cycles")->check(whole_number(1, 1000));
   app->add_option("--rate", args->options.rate_hz, "sample rate in Hz")->check(kPositive);
   app->add_option("--min-temp", args->options.chamber_min_c, "cold extreme of the chamber, °C");
   app->add_option("--max-temp", args->options.chamber_max_c, "hot extreme of the chamber, °C");
@@ -63,9 +63,11 @@ Command add_simulate(CLI::App& parent) {
       ->check(kNonNegative);
   app->add_option("--law", args->law,
                   "draw the unit from the law family with this seed (thermal network, drift law, noise; "
-                  "docs/simulator.md) instead of the default unit");
+                  "docs/simulator.md) instead of the default unit")
+      ->check(kSeed);
   app->add_option("--profile", args->profile, "with --law: cycle, slow, fast, staircase, partial or wander");
-  app->add_option("--profile-seed", args->profile_seed, "with --law: seed of the programme (default: the law's)");
+  app->add_option("--profile-seed", args->profile_seed, "with --law: seed of the programme (default: the law's)")
+      ->check(kSeed);
   app->add_flag("--describe", args->describe, "with --law: print the drawn unit's law on stderr");
   app->add_flag("--internal-states", args->options.record_internal_states,
                 "also write the coil temperature, gradient and hysteresis state of each axis");

@@ -1,5 +1,6 @@
 // Unclear messages from issue 18, each said for what it is: an empty list item, one gyro
-// column twice, a decimation that leaves too few samples, a CR-only or UTF-16 file, and
+// column twice, a number list or a whole number that is not one, a decimation that leaves
+// too few samples, a CR-only or UTF-16 file, and
 // nlohmann's exception tags in model-file errors.
 #include <gtest/gtest.h>
 
@@ -39,6 +40,32 @@ TEST_F(ClearMessages, EmptyListItemsAndAGyroColumnTwice) {
   expect_refused(fit + "--gyro gyro_x,gyro_x", 2, "--gyro names column gyro_x twice ('gyro_x' and 'gyro_x')");
   expect_refused(fit + "--gyro gyro_x,6", 2, "--gyro names column gyro_x twice ('gyro_x' and '6')");
   EXPECT_EQ(run_thermodrift(dir_, fit + "--gyro gyro_x --gyro gyro_y").status, 0);  // one flag per column still works
+}
+
+// Numbers in a list: an empty item was dropped (two scales for three columns), and a
+// word or NaN is named for what it is.
+TEST_F(ClearMessages, EmptyOrJunkItemsInNumberLists) {
+  const std::string fit = "fit --data log.csv --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z --model linear --out m.json ";
+  expect_refused(fit + "--temp-scale 1,,2", 2, "--temp-scale: expected numbers separated by single commas, not '1,,2'");
+  expect_refused(fit + "--gyro-scale 1,", 2, "--gyro-scale: expected numbers separated by single commas, not '1,'");
+  expect_refused(fit + "--temp-offset 0,x,0", 2, "--temp-offset: expected a finite number, not 'x'");
+  expect_refused(fit + "--temp-offset 0,nan,0", 2, "--temp-offset: expected a finite number, not 'nan'");
+  EXPECT_EQ(run_thermodrift(dir_, fit + "--temp-scale 1,1,1 --gyro-scale 1").status, 0);
+}
+
+// Whole-number options: CLI11 answered `--decimate 1e9` with "Could not convert", and took
+// `--seed -1` or a seed beyond 64 bits as some other seed without a word.
+TEST_F(ClearMessages, WholeNumberOptionsSayWhatTheyTake) {
+  const std::string fit = "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json ";
+  expect_refused(fit + "--decimate 1e9", 2, "--decimate: expected a whole number from 1 to 1000000000, not '1e9'");
+  expect_refused(fit + "--seed -1", 2, "--seed: expected a whole number from 0 to 18446744073709551615, not '-1'");
+  expect_refused(fit + "--seed 18446744073709551616", 2, "not '18446744073709551616'");
+  expect_refused(fit + "--threads 0", 2, "--threads: expected a whole number from 1 to 1024, not '0'");
+  const std::string svr = "fit --data log.csv --gyro gyro_x --temp temp_x --model svr --out m.json ";
+  expect_refused(svr + "--evaluations 0", 2, "--evaluations: expected a whole number from 1 to 1000000, not '0'");
+  expect_refused(svr + "--folds 2.5", 2, "--folds: expected a whole number from 2 to 100, not '2.5'");
+  expect_refused("simulate --out m.json --law -3", 2, "--law: expected a whole number from 0 to");
+  expect_refused("simulate --out m.json --cycles 2.5", 2, "--cycles: expected a whole number from 1 to 1000, not '2.5'");
 }
 
 TEST_F(ClearMessages, ADecimationThatLeavesTooFewSamplesSaysSo) {
