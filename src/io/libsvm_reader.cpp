@@ -42,6 +42,24 @@ bool parse_index(std::string_view token, long* index) {
   return parsed >= 1;
 }
 
+// std::getline up to kMaxLibsvmLineBytes: a file without line endings (a binary file, a
+// 50 MB line) is refused having read just over the limit, not held whole.
+bool read_line(std::istream& input, std::string& line, std::size_t line_number, const std::string& name) {
+  line.clear();
+  std::streambuf& buffer = *input.rdbuf();
+  bool any = false;
+  for (auto c = buffer.sbumpc(); c != std::char_traits<char>::eof(); c = buffer.sbumpc()) {
+    any = true;
+    if (c == '\n') break;
+    if (line.size() == kMaxLibsvmLineBytes) {
+      throw DataError(name, line_number, 0,
+                      fmt::format("line longer than {} bytes (no line ending?): not a libsvm line", kMaxLibsvmLineBytes));
+    }
+    line.push_back(static_cast<char>(c));
+  }
+  return any;
+}
+
 struct SparseRow {
   double label = 0;
   std::vector<std::pair<long, double>> entries;  // (1-based index, value)
@@ -54,7 +72,7 @@ LabelledData read_libsvm(std::istream& input, const std::string& name) {
   long max_index = 0;
   std::string line;
   std::size_t line_number = 0;
-  while (std::getline(input, line)) {
+  while (read_line(input, line, line_number + 1, name)) {
     ++line_number;
     std::string_view text(line);
     std::size_t position = 0;

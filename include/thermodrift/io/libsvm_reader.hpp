@@ -16,6 +16,9 @@ namespace thermodrift {
 // the line and column where the bound is crossed, never an allocation that exhausts memory.
 inline constexpr long kMaxLibsvmFeatureIndex = 10'000;
 inline constexpr long long kMaxLibsvmDenseCells = 1LL << 27;  // 1 GiB of doubles
+// A line is read up to this many bytes, never held whole beyond it (10,000 features of
+// 30 characters are 300 kB): a longer one is a DataError, as in a CSV log.
+inline constexpr std::size_t kMaxLibsvmLineBytes = std::size_t{1} << 20;
 
 struct LabelledData {
   Eigen::MatrixXd samples;  // one row per line of the file
@@ -23,8 +26,8 @@ struct LabelledData {
 };
 
 // Throws DataError naming line and column (1-based) on a bad label, a bad or
-// non-increasing index, a missing colon, a bad value, an index or dense size above the
-// bounds above, or a file without data lines.
+// non-increasing index, a missing colon, a bad value, an index, dense size or line length
+// above the bounds above, or a file without data lines.
 // Blank lines are skipped.
 LabelledData read_libsvm(const std::string& path);
 // The same from a stream; `name` is the file name used in errors.

@@ -114,6 +114,28 @@ TEST(LibsvmReader, BadValuePointsAtTheValue) {
   EXPECT_EQ(error_of("1 1:\n").column(), 5u);
 }
 
+// A line is bounded while it is read: the reader stops just past the limit (it would have
+// held a 50 MB line whole), names the line, and a line of exactly the limit still reads.
+TEST(LibsvmReader, ALineLongerThanTheLimitIsRefusedWithoutReadingItWhole) {
+  const std::string first = "1 1:2\n";
+  std::istringstream input(first + std::string(5 * kMaxLibsvmLineBytes, '7') + "\n3 1:4\n");
+  try {
+    read_libsvm(input, "data.libsvm");
+    ADD_FAILURE() << "no DataError";
+  } catch (const DataError& error) {
+    EXPECT_EQ(error.line(), 2u);
+    EXPECT_NE(std::string(error.what()).find("line longer than 1048576 bytes"), std::string::npos) << error.what();
+    EXPECT_LT(std::string(error.what()).size(), 200u);
+  }
+  EXPECT_LE(static_cast<std::size_t>(input.tellg()), first.size() + kMaxLibsvmLineBytes + 1);
+
+  std::string longest = "5 1:6";
+  longest.resize(kMaxLibsvmLineBytes, ' ');
+  const auto data = read_text(longest + "\n");
+  ASSERT_EQ(data.targets.size(), 1);
+  EXPECT_EQ(data.samples(0, 0), 6.0);
+}
+
 TEST(LibsvmReader, EmptyFileIsAnError) {
   EXPECT_NE(std::string(error_of("").what()).find("no data"), std::string::npos);
   EXPECT_NE(std::string(error_of("\n  \n").what()).find("no data"), std::string::npos);
