@@ -21,7 +21,6 @@ using namespace c_export_detail;
 
 namespace {
 
-
 bool valid_identifier(const std::string& name) {
   if (name.empty() || !(std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_')) return false;
   return std::all_of(name.begin(), name.end(),
@@ -107,7 +106,6 @@ bool CExportOptions::IsValid(std::string* error) const {
   }
   return true;
 }
-
 
 std::string export_c_header(const DriftModel& model, const CExportOptions& options) {
   std::string error;
