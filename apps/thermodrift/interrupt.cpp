@@ -1,4 +1,5 @@
 #include "interrupt.hpp"
+#include "exit_status.hpp"
 
 #include <atomic>
 #include <csignal>

@@ -1,5 +1,5 @@
 // thermodrift command line: CLI11 subcommands, one file each. This is the only place
-// where library exceptions become one line on stderr and an exit status (CLI.md).
+// where library exceptions become one line on stderr and an exit status (exit_status.hpp).
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
@@ -8,11 +8,12 @@
 #include <exception>
 
 #include "commands.hpp"
+#include "exit_status.hpp"
 #include "interrupt.hpp"
 #include "thermodrift/error.hpp"
 
 int main(int argc, char** argv) {
-  using thermodrift::ExitStatus;
+  using thermodrift::cli::ExitStatus;
   CLI::App app{"thermodrift: model and compensate the temperature drift of gyroscopes"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "thermodrift 0.1.0");

@@ -1,5 +1,6 @@
-// Typed errors of the library. The library throws; only the CLI turns an error into
-// one line on stderr and an exit status (CLI.md: 2 usage, 3 bad input data, 1 other).
+// Typed errors of the library, compiled in src/core (thermodrift_core, which every module
+// links). The library throws; only the CLI turns an error into one line on stderr and an
+// exit status (apps/thermodrift/exit_status.hpp).
 #pragma once
 
 #include <cstddef>
@@ -50,7 +51,21 @@ class DataError : public Error {
 // a 50 MB cell must not be echoed whole. Cut at a UTF-8 character boundary.
 std::string excerpt(std::string_view text, std::size_t limit = 40);
 
-// Exit statuses of the command-line tool (CLI.md).
-enum class ExitStatus : int { ok = 0, failure = 1, usage = 2, bad_data = 3, interrupted = 130 };
+// How an options struct's IsValid(std::string* why) says no, the same everywhere:
+//   const Invalid fail(why, "afsa");
+//   if (fish < 1) return fail(fmt::format("fish must be >= 1, got {}", fish));
+// sets *why (when given) to "afsa: fish must be >= 1, got 0" and returns false.
+class Invalid {
+ public:
+  explicit Invalid(std::string* why, std::string_view context = {}) : why_(why), context_(context) {}
+  bool operator()(const std::string& reason) const {
+    if (why_ != nullptr) *why_ = context_.empty() ? reason : std::string(context_) + ": " + reason;
+    return false;
+  }
+
+ private:
+  std::string* why_;
+  std::string_view context_;
+};
 
 }  // namespace thermodrift

@@ -96,10 +96,7 @@ void append_input_scaling(std::string& out, const DriftModel& model, const std::
 }  // namespace
 
 bool CExportOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& reason) {
-    if (error != nullptr) *error = reason;
-    return false;
-  };
+  const Invalid fail(error);
   if (!valid_identifier(prefix)) return fail(fmt::format("prefix '{}' is not a C identifier", prefix));
   if (max_rate_hz && !(std::isfinite(*max_rate_hz) && *max_rate_hz > 0)) {
     return fail(fmt::format("--max-rate must be a positive number of hertz, not {}", *max_rate_hz));

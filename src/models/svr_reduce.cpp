@@ -10,10 +10,7 @@
 namespace thermodrift {
 
 bool ReduceOptions::IsValid(std::string* error) const {
-  const auto fail = [&](std::string reason) {
-    if (error != nullptr) *error = std::move(reason);
-    return false;
-  };
+  const Invalid fail(error);
   if (max_vectors < 1) return fail("the reduced set needs at least 1 vector");
   if (max_points < 2) return fail("the reduced set needs at least 2 evaluation points");
   if (max_candidates < 1) return fail("the reduced set needs at least 1 candidate centre");

@@ -14,10 +14,7 @@
 namespace thermodrift {
 
 bool SvrOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& reason) {
-    if (error) *error = reason;
-    return false;
-  };
+  const Invalid fail(error);
   if (!(std::isfinite(C) && C > 0)) return fail(fmt::format("C must be a positive number, not {}", C));
   if (!(std::isfinite(gamma) && gamma > 0))
     return fail(fmt::format("gamma must be a positive number, not {}", gamma));

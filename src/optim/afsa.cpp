@@ -189,10 +189,7 @@ double Scheduled(Afsa::Schedule schedule, double initial, double floor, int iter
 }  // namespace
 
 bool Afsa::Options::IsValid(std::string* why) const {
-  auto fail = [why](std::string message) {
-    if (why != nullptr) *why = "afsa: " + std::move(message);
-    return false;
-  };
+  const Invalid fail(why, "afsa");
   if (fish < 1) return fail(fmt::format("fish must be >= 1, got {}", fish));
   if (iterations < 0) return fail(fmt::format("iterations must be >= 0, got {}", iterations));
   if (!(visual_range > 0.0) || !std::isfinite(visual_range))

@@ -21,10 +21,7 @@ bool Box::is_log(Eigen::Index dim) const {
 }
 
 bool Box::IsValid(std::string* why) const {
-  auto fail = [why](std::string message) {
-    if (why != nullptr) *why = std::move(message);
-    return false;
-  };
+  const Invalid fail(why);
   if (lower.size() == 0) return fail("box: no dimensions");
   if (upper.size() != lower.size())
     return fail(fmt::format("box: {} lower bounds but {} upper bounds", lower.size(), upper.size()));

@@ -69,10 +69,7 @@ bool EvaluateGrid(const std::vector<Axis>& axes, const std::vector<int>& order, 
 }  // namespace
 
 bool GridSearch::Options::IsValid(std::string* why) const {
-  auto fail = [why](std::string message) {
-    if (why != nullptr) *why = "grid search: " + std::move(message);
-    return false;
-  };
+  const Invalid fail(why, "grid search");
   if (points_per_dimension < 1)
     return fail(fmt::format("points_per_dimension must be >= 1, got {}", points_per_dimension));
   if (refinements < 0) return fail(fmt::format("refinements must be >= 0, got {}", refinements));

@@ -1,3 +1,4 @@
+#include "thermodrift/error.hpp"
 #include "thermodrift/optim/optimizer.hpp"
 
 #include <fmt/format.h>
@@ -5,10 +6,7 @@
 namespace thermodrift::optim {
 
 bool RunControl::IsValid(std::string* why) const {
-  auto fail = [why](std::string message) {
-    if (why != nullptr) *why = std::move(message);
-    return false;
-  };
+  const Invalid fail(why);
   if (threads < 1) return fail(fmt::format("threads must be at least 1, got {}", threads));
   if (max_evaluations < 0)
     return fail(fmt::format("max_evaluations must be >= 0 (0: no limit), got {}", max_evaluations));

@@ -13,10 +13,7 @@
 namespace thermodrift::optim {
 
 bool RandomSearch::Options::IsValid(std::string* why) const {
-  auto fail = [why](std::string message) {
-    if (why != nullptr) *why = "random search: " + std::move(message);
-    return false;
-  };
+  const Invalid fail(why, "random search");
   if (samples < 1) return fail(fmt::format("samples must be >= 1, got {}", samples));
   if (batch_size < 1) return fail(fmt::format("batch_size must be >= 1, got {}", batch_size));
   return true;
