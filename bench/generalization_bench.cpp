@@ -194,7 +194,7 @@ CalibrationOptions fit_options(Method method, long evaluations) {
   options.terms = method == Method::paper ? std::vector<std::string>{"dT", "rate"} : std::vector<std::string>{"auto"};
   if (options.model == "svr") {
     options.svr.C = 100.0;
-    options.svr.gamma = 1.0 / (2.0 * 1.0 * 1.0);
+    options.svr.gamma = gamma_of_sigma(1.0);
     options.svr.epsilon = 0.01;
     options.svr.tolerance = 1e-3;
     SvrTuningOptions tuning;

@@ -65,7 +65,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       options.svr.gamma = args.gamma;
     } else {
       const double sigma = app.count("--sigma") ? args.sigma : 1.0;
-      options.svr.gamma = 1.0 / (2.0 * sigma * sigma);
+      options.svr.gamma = gamma_of_sigma(sigma);
     }
     options.svr.epsilon = args.epsilon;
     options.svr.tolerance = args.tolerance;

@@ -52,7 +52,7 @@ nlohmann::json compress(SvrModel& model, const Eigen::MatrixXd& scaled_points, c
           {"unit", "deg/h"}};
 }
 
-double SvrModel::sigma() const { return std::sqrt(1.0 / (2.0 * function.gamma)); }
+double SvrModel::sigma() const { return sigma_of_gamma(function.gamma); }
 
 double SvrModel::predict(std::span<const double> features) const {
   // Few features (2-10): a small fixed buffer keeps prediction free of allocation.

@@ -7,10 +7,10 @@
 
 namespace thermodrift::sim {
 
-std::array<AxisModel, 3> default_axis_models() {
-  AxisModel x;  // the struct defaults are axis x
+std::array<SimulatedAxis, 3> default_simulated_axes() {
+  SimulatedAxis x;  // the struct defaults are axis x
 
-  AxisModel y;
+  SimulatedAxis y;
   y.sensor_time_constant_s = 240.0;
   y.coil_time_constant_s = 650.0;
   y.gradient_gain_s = 90.0;
@@ -23,7 +23,7 @@ std::array<AxisModel, 3> default_axis_models() {
   y.gradient_rate_dph_per_c_per_min = -2.0;
   y.hysteresis_dph = 0.5;
 
-  AxisModel z;
+  SimulatedAxis z;
   z.sensor_time_constant_s = 150.0;
   z.coil_time_constant_s = 880.0;
   z.gradient_gain_s = 45.0;
@@ -73,7 +73,7 @@ class Checker {
   std::string message_;
 };
 
-void check_axis(Checker& check, const AxisModel& axis) {
+void check_axis(Checker& check, const SimulatedAxis& axis) {
   check.positive(axis.sensor_time_constant_s, "sensor_time_constant_s");
   check.positive(axis.coil_time_constant_s, "coil_time_constant_s");
   check.non_negative(axis.gradient_gain_s, "gradient_gain_s");
@@ -112,7 +112,7 @@ bool SimulatorOptions::IsValid(std::string* error) const {
   check.non_negative(start_soak_min, "start_soak_min");
   check.finite(reference_temperature_c, "reference_temperature_c");
   check.positive(hysteresis_rate_scale_c_per_min, "hysteresis_rate_scale_c_per_min");
-  for (const AxisModel& axis : axes) check_axis(check, axis);
+  for (const SimulatedAxis& axis : axes) check_axis(check, axis);
 
   check.non_negative(noise.angle_random_walk_deg_per_sqrt_h, "angle_random_walk_deg_per_sqrt_h");
   check.non_negative(noise.bias_instability_dph, "bias_instability_dph");

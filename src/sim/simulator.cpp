@@ -30,7 +30,7 @@ class FirstOrderLag {
 // The thermal state of one axis and the drift law evaluated on it.
 class AxisPhysics {
  public:
-  AxisPhysics(const AxisModel& model, const SimulatorOptions& options, double dt_s)
+  AxisPhysics(const SimulatedAxis& model, const SimulatorOptions& options, double dt_s)
       : model_(model),
         reference_c_(options.reference_temperature_c),
         hysteresis_scale_c_per_s_(options.hysteresis_rate_scale_c_per_min / 60.0),
@@ -82,7 +82,7 @@ class AxisPhysics {
     return std::tanh(coil_rate_c_per_s / hysteresis_scale_c_per_s_);
   }
 
-  AxisModel model_;
+  SimulatedAxis model_;
   double reference_c_;
   double hysteresis_scale_c_per_s_;
   FirstOrderLag housing_lag_;

@@ -361,7 +361,7 @@ void judge_by_svr(FeatureSelection& selection, const std::vector<ChamberLog>& lo
       cv.blocks = held_out.blocks;
       cv.solver = options.fixed;
       const SvrObjective objective(x, y, cv);
-      scaled_mse = objective(options.fixed.C, std::sqrt(0.5 / options.fixed.gamma), options.fixed.epsilon);
+      scaled_mse = objective(options.fixed.C, sigma_of_gamma(options.fixed.gamma), options.fixed.epsilon);
     }
     const double mse = scaled_mse * scaling.target_scale * scaling.target_scale;
     selection.path.push_back({"svr", joined(terms, 0), mse, terms});

@@ -282,7 +282,7 @@ SvrObjective::~SvrObjective() = default;
 double SvrObjective::operator()(double C, double sigma, double epsilon) const {
   SvrOptions settings = state_->search;
   settings.C = C;
-  settings.gamma = 1.0 / (2.0 * sigma * sigma);
+  settings.gamma = gamma_of_sigma(sigma);
   settings.epsilon = epsilon;
   const SvrTrainer trainer(settings);
   // Mean of the per-fold MSEs (each fold's error counts equally, as in k-fold CV).
@@ -366,7 +366,7 @@ SvrTuningResult tune_svr(const Eigen::MatrixXd& samples, const Eigen::VectorXd& 
   SvrTuningResult result;
   result.C = run.best_point(0);
   result.sigma = run.best_point(1);
-  result.gamma = 1.0 / (2.0 * result.sigma * result.sigma);
+  result.gamma = gamma_of_sigma(result.sigma);
   result.epsilon = options.tune_epsilon ? run.best_point(2) : options.epsilon;
   result.objective_value = run.best_value;
   result.objective = options.objective;

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -20,6 +21,12 @@
 #include "thermodrift/stop_token.hpp"
 
 namespace thermodrift {
+
+// The RBF kernel's width σ, on standardized features, and libsvm's γ = 1/(2σ²): tuning
+// and the CLI speak σ, the kernel and the model file γ (the file writes σ beside it for
+// people). The one place they are converted.
+inline double gamma_of_sigma(double sigma) { return 1.0 / (2.0 * sigma * sigma); }
+inline double sigma_of_gamma(double gamma) { return std::sqrt(1.0 / (2.0 * gamma)); }
 
 struct SvrOptions {
   double C = 1.0;                 // penalty on points outside the tube (libsvm -c)

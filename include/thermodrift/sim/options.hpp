@@ -13,7 +13,7 @@ namespace thermodrift::sim {
 
 // Thermal path and drift law of one gyro axis. Drift in °/h, temperatures in °C,
 // temperature rates in °C/min (the project's units). The default is axis x.
-struct AxisModel {
+struct SimulatedAxis {
   // --- thermal path: chamber air -> housing (where the sensor sits) -> fiber coil ---
   double sensor_time_constant_s = 180.0;      // housing/sensor lag behind the chamber air
   double coil_time_constant_s = 420.0;        // fiber coil lag behind the housing
@@ -31,7 +31,7 @@ struct AxisModel {
 
 // The three default axes. They differ in every coefficient and time constant, some in
 // sign, so the axes do not share one drift law (the paper's cross-axis experiment).
-std::array<AxisModel, 3> default_axis_models();
+std::array<SimulatedAxis, 3> default_simulated_axes();
 
 // Rate noise of every axis (same for all three) and of the temperature sensors.
 struct NoiseOptions {
@@ -61,7 +61,7 @@ struct SimulatorOptions {
   bool heat_first = true;                 // a cycle goes start -> hot -> cold -> start (else cold first)
   double reference_temperature_c = 20.0;  // ΔTc = Tc - reference in the drift law
   double hysteresis_rate_scale_c_per_min = 0.2;  // coil rate at which the heating/cooling state saturates
-  std::array<AxisModel, 3> axes = default_axis_models();  // x, y, z
+  std::array<SimulatedAxis, 3> axes = default_simulated_axes();  // x, y, z
   NoiseOptions noise;                     // rate and temperature noise
   bool record_internal_states = false;    // append coil_*, gradient_*, hysteresis_* columns
 

@@ -21,7 +21,7 @@ TEST(SimulatorOptions, DefaultsAreValid) {
 }
 
 TEST(SimulatorOptions, DefaultAxesDiffer) {
-  const auto axes = default_axis_models();
+  const auto axes = default_simulated_axes();
   EXPECT_NE(axes[0].coil_time_constant_s, axes[1].coil_time_constant_s);
   EXPECT_NE(axes[1].coil_time_constant_s, axes[2].coil_time_constant_s);
   // Opposite signs of the temperature coefficient: no single law fits all three.

@@ -215,7 +215,7 @@ TEST(Simulate, DriftIsLinearInTheRecordedInternalStates) {
     }
     const Eigen::VectorXd fitted = least_squares(x, y);
     EXPECT_LT(rms(x * fitted - y), 1e-3) << axis;
-    const AxisModel& model = options.axes[a];
+    const SimulatedAxis& model = options.axes[a];
     EXPECT_NEAR(fitted(1), model.temperature_dph_per_c, 1e-3) << axis;
     EXPECT_NEAR(fitted(3), model.rate_dph_per_c_per_min, 0.02 * std::abs(model.rate_dph_per_c_per_min)) << axis;
     EXPECT_NEAR(fitted(5), model.hysteresis_dph, 0.02 * std::abs(model.hysteresis_dph)) << axis;
