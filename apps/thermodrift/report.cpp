@@ -56,11 +56,11 @@ std::vector<std::vector<double>> read_true_drift(const std::string& file, const 
 int run_report(const ReportArguments& args) {
   const auto start = std::chrono::steady_clock::now();
   if (args.data.files.size() != 1) throw UsageError("report reads one log (--data FILE)");
-  StagedFolder out(args.out);  // checked before the log is read and the study run
+  check_output_folder(args.out);  // before the log is read and the study run; write_report stages it
   const LogSpec spec = args.data.spec();
   const ChamberLog log = args.data.read(spec, args.data.warm_up_seconds()).front();
   ReportOptions options;
-  options.out_dir = out.staging();
+  options.out_dir = args.out;
   options.seed = args.seed;
   options.threads = args.threads;
   options.study.calibration.smooth_seconds = args.data.smooth;
@@ -96,7 +96,6 @@ int run_report(const ReportArguments& args) {
       "read the log", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   options.progress = progress_printer("thermodrift report", start);
   const ReportResult result = write_report(log, spec, options);
-  out.commit();
   print_report_tables(result.summary);
   for (const auto& model : result.study.models) {
     for (std::size_t a = 0; a < model.calibration.model.axes.size(); ++a) {
@@ -106,7 +105,7 @@ int run_report(const ReportArguments& args) {
     }
   }
   if (!result.figures_drawn) warn(result.figures_note);
-  fmt::print("\nreport: {}\nsummary: {}\n", out.committed_path(result.html_path), out.committed_path(result.summary_path));
+  fmt::print("\nreport: {}\nsummary: {}\n", result.html_path, result.summary_path);
   return 0;
 }
 

@@ -119,8 +119,14 @@ nlohmann::json metrics_cell(const ResidualMetrics& metrics, double floor) {
 
 ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const ReportOptions& options) {
   namespace fs = std::filesystem;
-  check_output_folder(options.out_dir);
-  fs::create_directories(options.out_dir);
+  // The folder appears whole or not at all (io/atomic_file.hpp): everything is written
+  // into a staging folder beside it and committed at the end, so an error or a stop
+  // leaves out_dir as it was. A folder that exists keeps the files the report does not write.
+  const fs::path target(options.out_dir);
+  std::error_code parents_made;  // if not, StagedFolder says why
+  if (!options.out_dir.empty() && target.has_parent_path()) fs::create_directories(target.parent_path(), parents_made);
+  StagedFolder staged(options.out_dir);
+  const std::string& out_dir = staged.staging();
   const auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
@@ -206,13 +212,13 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   }
   stop.throw_if_requested("report");
   for (const auto& m : study.models) {
-    save_drift_model(m.calibration.model, (fs::path(options.out_dir) / ("model_" + m.model + ".json")).string());
+    save_drift_model(m.calibration.model, (fs::path(out_dir) / ("model_" + m.model + ".json")).string());
   }
   timings.emplace_back("compensation, Allan deviation, model files", seconds_since(start));
 
   say("drawing the figures with gnuplot");
   start = Clock::now();
-  FigureOutcome drawn = draw_figures(figures, options.out_dir, options.gnuplot, stop);
+  FigureOutcome drawn = draw_figures(figures, out_dir, options.gnuplot, stop);
   result.figures_drawn = drawn.drawn;
   result.figures_note = drawn.note;
   timings.emplace_back("figures (gnuplot)", seconds_since(start));
@@ -366,8 +372,8 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   summary["figures_note"] = drawn.note;
   summary["study"] = study.to_json();
 
-  result.html_path = (fs::path(options.out_dir) / "report.html").string();
-  result.summary_path = (fs::path(options.out_dir) / "summary.json").string();
+  const std::string html_path = (fs::path(out_dir) / "report.html").string();
+  const std::string summary_path = (fs::path(out_dir) / "summary.json").string();
   timings.emplace_back("summary and page", seconds_since(start));
   nlohmann::json timing_json = nlohmann::json::array();
   double total = 0;
@@ -377,8 +383,12 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   }
   summary["timings"] = timing_json;
   summary["total_seconds"] = total;
-  write_file_atomically(result.summary_path, summary.dump(1) + "\n");
-  write_file_atomically(result.html_path, render_html(summary, drawn, options.out_dir));
+  write_file_atomically(summary_path, summary.dump(1) + "\n");
+  write_file_atomically(html_path, render_html(summary, drawn, out_dir));
+  stop.throw_if_requested("report");
+  staged.commit();
+  result.html_path = staged.committed_path(html_path);
+  result.summary_path = staged.committed_path(summary_path);
   result.summary = std::move(summary);
   return result;
 }

@@ -26,8 +26,10 @@ struct ReportOptions {
   // Models, calibration settings, split, progress; study.calibration.stop also stops the
   // report's own steps (the cross-axis fits, compensation, figures, gnuplot).
   StudyOptions study;
-  // Created if missing; each file is replaced whole, but an error or a stop can leave some
-  // files written and others not: the CLI writes into a StagedFolder's staging folder.
+  // Created if missing (its parents too). Written whole or not at all: into a staging
+  // folder beside it, committed at the end (io/atomic_file.hpp, StagedFolder), so an error
+  // or a stop leaves it as it was; an existing folder keeps the files the report does not
+  // write and gets the others replaced.
   std::string out_dir;
   std::string title = "thermodrift report";
   std::string command_line;                // how the report was asked for (shown on the page)
