@@ -7,12 +7,14 @@
 
 #include <array>
 #include <cerrno>
+#include <csignal>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <streambuf>
+#include <string_view>
 
 #include "thermodrift/error.hpp"
 
@@ -246,12 +248,35 @@ void write_tree(const fs::path& from, const fs::path& to) {
   }
 }
 
+// Staging folders of DIR (.DIR.partial-PID-N) whose process is gone: a second Ctrl-C
+// ends the tool at once (std::_Exit from the signal handler, which can run no clean-up),
+// and a killed process leaves its staging folder too. The next run into DIR removes them.
+// A folder of a process still running (another run into DIR) is left alone.
+void remove_abandoned_staging(const fs::path& parent, const std::string& name) {
+  const std::string prefix = "." + name + ".partial-";
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(parent, error)) {
+    const std::string entry_name = entry.path().filename().string();
+    if (entry_name.rfind(prefix, 0) != 0) continue;
+    const std::string_view rest = std::string_view(entry_name).substr(prefix.size());
+    long pid = 0;
+    const auto [end, parsed] = std::from_chars(rest.data(), rest.data() + rest.size(), pid);
+    if (parsed != std::errc{} || end == rest.data() || end == rest.data() + rest.size() || *end != '-' || pid <= 0) {
+      continue;
+    }
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
+    std::error_code ignored;
+    fs::remove_all(entry.path(), ignored);
+  }
+}
+
 }  // namespace
 
 StagedFolder::StagedFolder(std::string folder) : folder_(std::move(folder)) {
   check_output_folder(folder_);
   const fs::path path = folder_path(folder_);
   const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  remove_abandoned_staging(parent, path.filename().string());
   // mkdir, not mkdtemp: the folder gets the permissions the umask gives a new folder,
   // which it keeps when it is renamed to DIR.
   for (int attempt = 0;; ++attempt) {

@@ -66,7 +66,9 @@ void check_output_folder(const std::string& folder);
 // commit() renames that folder to DIR when DIR did not exist, or else writes each file
 // into DIR under the rule above (replacing files of the same name, keeping the others).
 // Without commit() — an error, an interrupt — the destructor removes the staging folder,
-// so DIR is left as it was: not created, no new or half-written files in it.
+// so DIR is left as it was: not created, no new or half-written files in it. A process
+// that ends without its destructors (a second Ctrl-C, a kill) leaves its staging folder;
+// the next StagedFolder of DIR removes those of processes that no longer run.
 class StagedFolder {
  public:
   // Throws UsageError as check_output_folder, Error if the staging folder cannot be made.

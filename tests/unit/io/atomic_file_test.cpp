@@ -3,10 +3,14 @@
 // kinds, "" and directories are usage errors. Device nodes are made in a temporary folder.
 #include "thermodrift/io/atomic_file.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/socket.h>
 #include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -238,6 +242,30 @@ TEST(StagedFolder, NewFolderAppearsWholeOnCommitAndNotAtAllWithout) {
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"report"});
   EXPECT_EQ(read_file(dir.file("report/report.html")), "new page");
   EXPECT_EQ(read_file(dir.file("report/figures/raw.dat")), "1 2\n");
+}
+
+// A process ended by a second Ctrl-C or a kill runs no destructor and leaves its staging
+// folder; the next run into the same folder removes it. One of a process still running
+// (this one), and one of another folder's name, are left alone.
+TEST(StagedFolder, StagingFoldersOfEndedProcessesAreRemovedByTheNextRun) {
+  TempDir dir;
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);  // reaped: its pid runs nothing now
+  const std::string ended = fmt::format(".report.partial-{}-0", child);
+  const std::string running = fmt::format(".report.partial-{}-7", ::getpid());
+  const std::string other = fmt::format(".other.partial-{}-0", child);
+  for (const auto& name : {ended, running, other}) {
+    fs::create_directory(dir.path() / name);
+    dir.write(name + "/report.html", "half");
+  }
+  StagedFolder out(dir.file("report"));
+  const auto entries = dir.entries();
+  EXPECT_EQ(std::count(entries.begin(), entries.end(), ended), 0);
+  EXPECT_EQ(std::count(entries.begin(), entries.end(), running), 1);
+  EXPECT_EQ(std::count(entries.begin(), entries.end(), other), 1);
 }
 
 TEST(StagedFolder, ExistingFolderGetsItsFilesReplacedAndKeepsTheOthers) {
