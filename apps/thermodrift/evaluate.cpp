@@ -30,7 +30,7 @@ int run_evaluate(const EvaluateArguments& args) {
   if (args.data.format == "libsvm") {
     if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
     const auto& file = args.data.files.front();
-    evaluations.push_back({evaluate_libsvm(model, read_libsvm(file), file), std::nullopt});
+    evaluations.push_back({evaluate_libsvm(model, read_libsvm(file, interrupt_token()), file), std::nullopt});
   } else {
     double warm_up = 0;
     for (const auto& axis : model.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());

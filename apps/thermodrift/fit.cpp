@@ -102,7 +102,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   std::vector<ChamberLog> logs;
   if (args.data.format == "libsvm") {
     if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
-    calibration = calibrate_libsvm(read_libsvm(args.data.files.front()), args.data.files.front(), options);
+    calibration = calibrate_libsvm(read_libsvm(args.data.files.front(), interrupt_token()), args.data.files.front(), options);
   } else {
     const LogSpec spec = args.data.spec();
     logs = args.data.read(spec, args.data.warm_up_seconds(args.rate_span));

@@ -67,13 +67,14 @@ struct SparseRow {
 
 }  // namespace
 
-LabelledData read_libsvm(std::istream& input, const std::string& name) {
+LabelledData read_libsvm(std::istream& input, const std::string& name, const StopToken& stop) {
   std::vector<SparseRow> rows;
   long max_index = 0;
   std::string line;
   std::size_t line_number = 0;
   while (read_line(input, line, line_number + 1, name)) {
     ++line_number;
+    if (line_number % 4096 == 0) stop.throw_if_requested("reading the libsvm file");
     std::string_view text(line);
     std::size_t position = 0;
     auto next_token = [&]() -> std::pair<std::size_t, std::string_view> {
@@ -145,10 +146,10 @@ LabelledData read_libsvm(std::istream& input, const std::string& name) {
   return data;
 }
 
-LabelledData read_libsvm(const std::string& path) {
+LabelledData read_libsvm(const std::string& path, const StopToken& stop) {
   std::ifstream input(path);
   if (!input) throw DataError(path, 0, 0, "cannot open file");
-  return read_libsvm(input, path);
+  return read_libsvm(input, path, stop);
 }
 
 void write_libsvm(std::ostream& output, const Eigen::MatrixXd& samples,

@@ -9,6 +9,8 @@
 
 #include <Eigen/Dense>
 
+#include "thermodrift/stop_token.hpp"
+
 namespace thermodrift {
 
 // The data are held dense (drift models have a handful of features), so the reader bounds
@@ -28,10 +30,10 @@ struct LabelledData {
 // Throws DataError naming line and column (1-based) on a bad label, a bad or
 // non-increasing index, a missing colon, a bad value, an index, dense size or line length
 // above the bounds above, or a file without data lines.
-// Blank lines are skipped.
-LabelledData read_libsvm(const std::string& path);
+// Blank lines are skipped. `stop` is asked every 4096 lines (Interrupted).
+LabelledData read_libsvm(const std::string& path, const StopToken& stop = {});
 // The same from a stream; `name` is the file name used in errors.
-LabelledData read_libsvm(std::istream& input, const std::string& name);
+LabelledData read_libsvm(std::istream& input, const std::string& name, const StopToken& stop = {});
 
 // Writes `data` in the same format (every column, full precision), as svm-train reads it.
 void write_libsvm(std::ostream& output, const Eigen::MatrixXd& samples,

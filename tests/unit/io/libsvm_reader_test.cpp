@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -134,6 +135,16 @@ TEST(LibsvmReader, ALineLongerThanTheLimitIsRefusedWithoutReadingItWhole) {
   const auto data = read_text(longest + "\n");
   ASSERT_EQ(data.targets.size(), 1);
   EXPECT_EQ(data.samples(0, 0), 6.0);
+}
+
+TEST(LibsvmReader, AStopRequestEndsTheRead) {
+  std::string text;
+  for (int i = 0; i < 10000; ++i) text += "1 1:2\n";
+  std::atomic<bool> stop{true};
+  std::istringstream input(text);
+  EXPECT_THROW(read_libsvm(input, "data.libsvm", StopToken(stop)), Interrupted);
+  std::istringstream again(text);
+  EXPECT_EQ(read_libsvm(again, "data.libsvm").targets.size(), 10000);  // no token: read whole
 }
 
 TEST(LibsvmReader, EmptyFileIsAnError) {
