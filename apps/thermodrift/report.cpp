@@ -16,6 +16,8 @@
 #include "numbers.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
+#include "thermodrift/io/csv_reader.hpp"
+#include "thermodrift/sim/chamber_run.hpp"
 #include "thermodrift/report/report.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
@@ -35,22 +37,20 @@ struct ReportArguments {
   long evaluations = 100;
 };
 
-// The true drift, when the log carries it: a column drift_<suffix> for every gyro_<suffix>
-// (as thermodrift simulate writes). Empty otherwise.
+// The true drift, when the log carries it (as thermodrift simulate writes it): the
+// simulator names its columns, the header says whether they are there.
 std::vector<std::vector<double>> read_true_drift(const std::string& file, const LogSpec& spec, const ChamberLog& log) {
+  const auto columns = sim::true_drift_columns(log.gyro_names);
+  if (!columns) return {};
+  const auto& header = CsvReader(file).header();
+  for (const auto& name : *columns) {
+    if (std::find(header.begin(), header.end(), name) == header.end()) return {};
+  }
   LogSpec drift_spec = spec;
-  drift_spec.gyro_columns.clear();
-  for (const auto& name : log.gyro_names) {
-    if (name.rfind("gyro_", 0) != 0) return {};
-    drift_spec.gyro_columns.push_back("drift_" + name.substr(5));
-  }
-  try {
-    ChamberLog drift = read_chamber_log(file, drift_spec);
-    if (drift.rows() != log.rows()) return {};
-    return drift.gyro;
-  } catch (const Error&) {
-    return {};  // no such columns: the true drift is unknown
-  }
+  drift_spec.gyro_columns = *columns;
+  ChamberLog drift = read_chamber_log(file, drift_spec);
+  if (drift.rows() != log.rows()) return {};
+  return drift.gyro;
 }
 
 int run_report(const ReportArguments& args) {

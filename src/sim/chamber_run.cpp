@@ -79,6 +79,15 @@ ChamberLog to_chamber_log(const ChamberRun& run) {
   return log;
 }
 
+std::optional<std::vector<std::string>> true_drift_columns(const std::vector<std::string>& gyro_columns) {
+  std::vector<std::string> drift;
+  for (const auto& name : gyro_columns) {
+    if (name.rfind("gyro_", 0) != 0) return std::nullopt;
+    drift.push_back("drift_" + name.substr(5));
+  }
+  return drift;
+}
+
 double expected_noise_floor(const NoiseOptions& noise, double rate_hz, double window_s) {
   const std::size_t window = window_samples(window_s, rate_hz);
   const double w = static_cast<double>(window);

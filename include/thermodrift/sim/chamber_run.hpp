@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <cstddef>
 #include <iosfwd>
 #include <string>
@@ -45,6 +46,11 @@ struct ChamberRun {
   // only: the floor of a held-out part (the smoothing still sees the rows before it).
   std::array<double, 3> noise_floor(double window_s, std::size_t first_row = 0) const;
 };
+
+// The columns a log written by write_csv (`thermodrift simulate`) holds the true drift
+// of each gyro column in: drift_<suffix> for gyro_<suffix>. Nothing when a gyro column is
+// not named so (a log from a chamber, not from the simulator).
+std::optional<std::vector<std::string>> true_drift_columns(const std::vector<std::string>& gyro_columns);
 
 // The run as the log thermodrift reads (time_s; gyro_x/y/z in °/h; temp_x/y/z, one per
 // axis), without writing it out: line numbers as write_csv would give them.
