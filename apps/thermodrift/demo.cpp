@@ -65,20 +65,9 @@ int run_demo(const DemoArguments& args) {
   log.source = log_path;  // as the report and the model files name it
   progress(fmt::format("wrote and read {} ({} rows)", log_path, log.rows()));
 
-  ReportOptions options;
+  ReportOptions options = paper_report_options(args.seed, args.threads, SvrTuningOptions{}.evaluations,
+                                               args.identify, args.features, stop);
   options.out_dir = out.staging();
-  options.study.calibration.stop = stop;
-  options.seed = args.seed;
-  options.threads = args.threads;
-  options.study.calibration.svr.threads = args.threads;
-  // SVR + AFSA, as the paper: C and σ tuned per axis by blocked 5-fold CV on the training part.
-  SvrTuningOptions tuning;
-  tuning.threads = std::max(1, options.threads);
-  tuning.seed = options.seed;
-  options.study.calibration.tuning = tuning;
-  options.study.calibration.selection.threads = tuning.threads;  // axes searched at once
-  options.study.calibration.selection.method = args.identify;
-  options.study.other_terms = args.features;
   options.study.split_row = run.cycle_start_rows().back();
   options.study.split_description = fmt::format("fitted on chamber cycle 1, held out: cycle 2 (from t = {:g} s)",
                                                 run.cycle_start_rows().back() / run.rate_hz);

@@ -59,22 +59,10 @@ int run_report(const ReportArguments& args) {
   check_output_folder(args.out);  // before the log is read and the study run; write_report stages it
   const LogSpec spec = args.data.spec();
   const ChamberLog log = args.data.read(spec, args.data.warm_up_seconds()).front();
-  ReportOptions options;
+  ReportOptions options =
+      paper_report_options(args.seed, args.threads, args.evaluations, args.identify, args.features, interrupt_token());
   options.out_dir = args.out;
-  options.seed = args.seed;
-  options.threads = args.threads;
   options.study.calibration.smooth_seconds = args.data.smooth;
-  options.study.calibration.stop = interrupt_token();
-  options.study.calibration.svr.threads = std::max(1, args.threads);
-  // SVR + AFSA, as the paper: C and σ tuned per axis by blocked 5-fold CV on the training part.
-  SvrTuningOptions tuning;
-  tuning.threads = std::max(1, options.threads);
-  tuning.seed = options.seed;
-  tuning.evaluations = args.evaluations;
-  options.study.calibration.tuning = tuning;
-  options.study.calibration.selection.threads = tuning.threads;  // axes searched at once
-  options.study.calibration.selection.method = args.identify;
-  options.study.other_terms = args.features;
   if (args.split_time) {
     // S is on the log's clock (its time column in s); the log's times count from its first row.
     const double origin = log.time_origin ? log.time_origin->stamp.approximate_seconds() : 0.0;

@@ -117,6 +117,26 @@ nlohmann::json metrics_cell(const ResidualMetrics& metrics, double floor) {
 
 }  // namespace
 
+ReportOptions paper_report_options(std::uint64_t seed, int threads, long evaluations,
+                                   FeatureSelectionOptions::Method identify,
+                                   std::vector<std::string> other_terms, StopToken stop) {
+  ReportOptions options;
+  options.seed = seed;
+  options.threads = std::max(1, threads);
+  CalibrationOptions& calibration = options.study.calibration;
+  calibration.stop = stop;
+  calibration.svr.threads = options.threads;
+  SvrTuningOptions tuning;
+  tuning.threads = options.threads;
+  tuning.seed = seed;
+  tuning.evaluations = evaluations;
+  calibration.tuning = tuning;
+  calibration.selection.threads = options.threads;  // axes searched at once
+  calibration.selection.method = identify;
+  options.study.other_terms = std::move(other_terms);
+  return options;
+}
+
 ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const ReportOptions& options) {
   namespace fs = std::filesystem;
   // The folder appears whole or not at all (io/atomic_file.hpp): everything is written

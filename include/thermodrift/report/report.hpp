@@ -52,6 +52,16 @@ struct ReportResult {
   std::string figures_note;     // why there are no figures, when there are none
 };
 
+// The paper's study as `thermodrift report` and `demo` run it: linear, stepwise and
+// SVR + AFSA (C and σ tuned per axis by blocked 5-fold CV on the training part, with
+// `evaluations` per axis), on the paper's pair and, when given, on `other_terms` ({"auto"}:
+// identified by `identify`); `threads` for the tuning, the SVR fits and the feature
+// search, every random choice from `seed`, stopped by `stop`. The caller adds out_dir,
+// the split, the title and what it knows of the data.
+ReportOptions paper_report_options(std::uint64_t seed, int threads, long evaluations,
+                                   FeatureSelectionOptions::Method identify,
+                                   std::vector<std::string> other_terms, StopToken stop);
+
 // Runs everything and writes DIR/report.html, DIR/summary.json, DIR/*.svg, the gnuplot
 // script and its data (DIR/figures/), and one model file per model kind. Throws the
 // study's errors; a failing gnuplot is an Error naming its log file.
