@@ -42,7 +42,8 @@ struct ReportArguments {
 std::vector<std::vector<double>> read_true_drift(const std::string& file, const LogSpec& spec, const ChamberLog& log) {
   const auto columns = sim::true_drift_columns(log.gyro_names);
   if (!columns) return {};
-  const auto& header = CsvReader(file).header();
+  const CsvReader reader(file);
+  const auto& header = reader.header();
   for (const auto& name : *columns) {
     if (std::find(header.begin(), header.end(), name) == header.end()) return {};
   }
