@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <memory>
-#include <thread>
 
 #include "commands.hpp"
 #include "data_options.hpp"
@@ -45,55 +44,36 @@ struct FitArguments {
 };
 
 int run_fit(const FitArguments& args, const CLI::App& app) {
-  CalibrationOptions options;
-  options.model = args.model;
-  options.smooth_seconds = args.data.smooth;
-  if (args.rate_span > 0) options.rate_span_seconds = args.rate_span;
-  if (args.decimate > 0) options.decimation = args.decimate;
-  options.terms = args.features;
-  options.selection.method = args.identify;
-  options.folds_by = parse_folds_by(args.folds_by);
-  options.stop = interrupt_token();
-  options.selection.threads =
-      args.threads > 0 ? args.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  if (args.model == "svr") {
-    if (app.count("--sigma") && app.count("--gamma")) {
-      throw UsageError("give --sigma or --gamma, not both (gamma = 1/(2 sigma²))");
-    }
-    options.svr.C = app.count("--C") ? args.C : 100.0;
-    if (app.count("--gamma")) {
-      options.svr.gamma = args.gamma;
-    } else {
-      const double sigma = app.count("--sigma") ? args.sigma : 1.0;
-      options.svr.gamma = gamma_of_sigma(sigma);
-    }
-    options.svr.epsilon = args.epsilon;
-    options.svr.tolerance = args.tolerance;
-    if (app.count("--max-vectors")) options.max_vectors = args.max_vectors;
-    // The paper's method tunes C and σ; fixed values are used only when both are given.
-    const bool fixed = app.count("--C") && (app.count("--sigma") || app.count("--gamma"));
-    if (!args.tune.empty() || !fixed) {
-      SvrTuningOptions tuning;
-      tuning.method = parse_tune_method(args.tune.empty() ? "afsa" : args.tune);
-      tuning.objective = parse_tune_objective(args.objective);
-      tuning.seed = args.seed;
-      tuning.threads = args.threads > 0 ? args.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-      tuning.evaluations = args.evaluations;
-      tuning.folds = args.folds;
-      tuning.tune_epsilon = args.tune_epsilon;
-      tuning.epsilon = args.epsilon;
-      tuning.solver = options.svr;
-      std::string why;
-      if (!tuning.IsValid(&why)) throw UsageError(why);
-      options.tuning = tuning;
-    }
-  } else {
+  if (args.model != "svr") {
     // Never silently ignored: the SVR's and its tuning's options with another model.
     for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
                                "--evaluations", "--folds", "--tune-epsilon", "--max-vectors"}) {
       if (app.count(option)) throw UsageError(fmt::format("{} applies to --model svr, not {}", option, args.model));
     }
   }
+  FitRequest request;  // the library holds the defaults and the rule of when to tune
+  request.model = args.model;
+  request.smooth_seconds = args.data.smooth;
+  if (args.rate_span > 0) request.rate_span_seconds = args.rate_span;
+  if (args.decimate > 0) request.decimation = args.decimate;
+  request.terms = args.features;
+  request.identify = args.identify;
+  request.folds_by = parse_folds_by(args.folds_by);
+  request.threads = args.threads;
+  request.seed = args.seed;
+  if (app.count("--C")) request.C = args.C;
+  if (app.count("--sigma")) request.sigma = args.sigma;
+  if (app.count("--gamma")) request.gamma = args.gamma;
+  request.epsilon = args.epsilon;
+  request.tolerance = args.tolerance;
+  if (!args.tune.empty()) request.tune = args.tune;
+  request.objective = args.objective;
+  request.evaluations = args.evaluations;
+  request.folds = args.folds;
+  request.tune_epsilon = args.tune_epsilon;
+  if (app.count("--max-vectors")) request.max_vectors = args.max_vectors;
+  request.stop = interrupt_token();
+  CalibrationOptions options = calibration_options(request);
   ProgressPrinter progress("thermodrift fit");
   std::size_t axis_count = 1;
   options.tuning_progress = [&](std::size_t axis, const optim::Progress& p) { return progress.tuning(axis, axis_count, p); };

@@ -249,6 +249,46 @@ std::optional<ExpectedHeldOut> expected_held_out(const nlohmann::json& fit) {
   return std::nullopt;
 }
 
+CalibrationOptions calibration_options(const FitRequest& request) {
+  const int threads =
+      request.threads > 0 ? request.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  CalibrationOptions options;
+  options.model = request.model;
+  options.smooth_seconds = request.smooth_seconds;
+  options.rate_span_seconds = request.rate_span_seconds;
+  options.decimation = request.decimation;
+  options.terms = request.terms;
+  options.selection.method = request.identify;
+  options.selection.threads = threads;
+  options.folds_by = request.folds_by;
+  options.stop = request.stop;
+  if (request.model != "svr") return options;
+  if (request.sigma && request.gamma) throw UsageError("give --sigma or --gamma, not both (gamma = 1/(2 sigma²))");
+  options.svr.C = request.C.value_or(100.0);
+  options.svr.gamma = request.gamma ? *request.gamma : gamma_of_sigma(request.sigma.value_or(1.0));
+  options.svr.epsilon = request.epsilon;
+  options.svr.tolerance = request.tolerance;
+  options.max_vectors = request.max_vectors;
+  // The paper's method tunes C and σ; fixed values are used only when both are given.
+  const bool fixed = request.C && (request.sigma || request.gamma);
+  if (request.tune || !fixed) {
+    SvrTuningOptions tuning;
+    tuning.method = parse_tune_method(request.tune.value_or("afsa"));
+    tuning.objective = parse_tune_objective(request.objective);
+    tuning.seed = request.seed;
+    tuning.threads = threads;
+    tuning.evaluations = request.evaluations;
+    tuning.folds = request.folds;
+    tuning.tune_epsilon = request.tune_epsilon;
+    tuning.epsilon = request.epsilon;
+    tuning.solver = options.svr;
+    std::string why;
+    if (!tuning.IsValid(&why)) throw UsageError(why);
+    options.tuning = tuning;
+  }
+  return options;
+}
+
 bool chooses_features(const CalibrationOptions& options) {
   return options.terms.size() == 1 && options.terms.front() == "auto";
 }

@@ -57,6 +57,40 @@ struct CalibrationOptions {
   std::function<void(std::size_t axis, const std::string&)> selection_progress;
 };
 
+// What a fit is asked, each option given or not, and the one policy that turns it into
+// CalibrationOptions, so that `thermodrift fit` and any other front end (the Python
+// package) share every default. For the SVR, as the paper: C and σ (or γ) are tuned per
+// axis (AFSA unless `tune` names another method) unless both are given and `tune` is not;
+// the solver's own values are the given ones, else C = 100 and σ = 1. Options of the SVR
+// given with another model are the front end's to refuse, in its user's words.
+struct FitRequest {
+  std::string model = "linear";
+  double smooth_seconds = 100;
+  std::optional<double> rate_span_seconds;
+  std::optional<std::size_t> decimation;
+  std::vector<std::string> terms{"dT", "rate"};
+  FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
+  FoldsBy folds_by = FoldsBy::time;
+  int threads = 0;  // 0: every core
+  std::uint64_t seed = 1;
+  // SVR
+  std::optional<double> C;
+  std::optional<double> sigma;
+  std::optional<double> gamma;  // instead of sigma
+  double epsilon = 0.01;
+  double tolerance = 1e-3;
+  std::optional<std::string> tune;  // afsa, grid or random
+  std::string objective = "cv";
+  long evaluations = 49;
+  int folds = 5;
+  bool tune_epsilon = false;
+  std::optional<std::size_t> max_vectors;
+  StopToken stop;
+};
+// Throws UsageError for sigma and gamma both given, an unknown tune method or objective,
+// or tuning options that are not valid.
+CalibrationOptions calibration_options(const FitRequest& request);
+
 // True when options.terms is {"auto"}: calibrate chooses terms per axis (tune/feature_selection.hpp).
 bool chooses_features(const CalibrationOptions& options);
 
