@@ -241,9 +241,12 @@ void write_tree(const fs::path& from, const fs::path& to) {
       continue;
     }
     std::ifstream in(entry.path(), std::ios::binary);
-    AtomicFile out(target.string());
-    out.stream() << in.rdbuf();
     if (!in) throw Error(fmt::format("cannot read {}", entry.path().string()));
+    AtomicFile out(target.string());
+    // Inserting a streambuf that yields nothing sets failbit: an empty file (gnuplot's log
+    // when it had nothing to say) is an empty file, not a failed write.
+    if (in.peek() != std::ifstream::traits_type::eof()) out.stream() << in.rdbuf();
+    if (in.bad()) throw Error(fmt::format("cannot read {}", entry.path().string()));
     out.commit();
   }
 }

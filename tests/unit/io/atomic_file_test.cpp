@@ -268,6 +268,20 @@ TEST(StagedFolder, StagingFoldersOfEndedProcessesAreRemovedByTheNextRun) {
   EXPECT_EQ(std::count(entries.begin(), entries.end(), other), 1);
 }
 
+// An empty file (gnuplot's log when all went well) is copied into an existing folder as an
+// empty file; the copy used to fail (a stream that inserts nothing sets failbit), which
+// failed every report into an existing folder, and the demo, whose report stages inside it.
+TEST(StagedFolder, EmptyFilesReachAnExistingFolder) {
+  TempDir dir;
+  fs::create_directory(dir.path() / "report");
+  StagedFolder out(dir.file("report"));
+  fs::create_directory(fs::path(out.staging()) / "figures");
+  write_file_atomically((fs::path(out.staging()) / "figures" / "gnuplot.log").string(), "");
+  out.commit();
+  EXPECT_TRUE(fs::exists(dir.path() / "report" / "figures" / "gnuplot.log"));
+  EXPECT_EQ(read_file(dir.file("report/figures/gnuplot.log")), "");
+}
+
 TEST(StagedFolder, ExistingFolderGetsItsFilesReplacedAndKeepsTheOthers) {
   TempDir dir;
   fs::create_directory(dir.path() / "report");
