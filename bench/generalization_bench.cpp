@@ -2,9 +2,9 @@
 // calibrated on one chamber cycle, judged on the next cycle and on two other profiles.
 //
 //   build/bin/generalization_bench [--seeds acceptance|development|S,S,...] [--limit N]
-//                                  [--methods paper,linear,stepwise,svr] [--threads N]
+//                                  [--methods paper,linear,stepwise,svr,oracle] [--threads N]
 //                                  [--evaluations N] [--training cycle|two-runs]
-//                                  [--folds-by time|runs] [--json FILE]
+//                                  [--folds-by time|runs] [--sensor drawn|coil] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
 // is the training log, cycle 2 the "next cycle". Two other profiles of two distinct
@@ -14,10 +14,14 @@
 // 1800 s of settling; the ratio is the held-out MSE over the simulator's true noise floor
 // of that log from 1800 s on (a perfect model scores 1). --training two-runs adds to
 // cycle 1 a second training run of a third kind of programme (neither test kind), as a
-// user with two chamber runs would fit them (--data twice). docs/generalization.md says what
-// the methods are and has measured figures.
+// user with two chamber runs would fit them (--data twice). The `oracle` row is a bound, not
+// a method: least squares on the law's own regressors and true states (sim::law_regressors),
+// so only the coefficients come from the training log. --sensor coil (a diagnostic) puts
+// every thermometer on its own coil. docs/generalization.md says what the methods are and
+// has measured figures.
 #include <time.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -31,10 +35,12 @@
 #include <thread>
 #include <vector>
 
+#include <Eigen/Dense>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "generalization_summary.hpp"
+#include "thermodrift/features/moving_average.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/sim/law_family.hpp"
 #include "thermodrift/sim/standard_normal.hpp"
@@ -82,6 +88,9 @@ struct Arguments {
   FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;  // --features auto's search
   bool two_runs = false;                        // --training two-runs
   FoldsBy folds_by = CalibrationOptions{}.folds_by;
+  // A diagnostic, not a test: each axis' sensor moved onto its own coil (2 s), so the
+  // temperature column is the coil's and no thermal path lies between them.
+  bool sensor_on_coil = false;
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -101,8 +110,8 @@ Arguments parse(int argc, char** argv) {
     const std::string flag = argv[i];
     if (i + 1 >= argc) {
       fmt::print(stderr, "usage: {} [--seeds acceptance|development|S,S,...] [--limit N] [--methods "
-                         "paper,linear,stepwise,svr] [--threads N] [--evaluations N] [--identify greedy|thermal-node] "
-                         "[--training cycle|two-runs] [--folds-by time|runs] [--json FILE]\n", argv[0]);
+                         "paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] [--identify greedy|thermal-node] "
+                         "[--training cycle|two-runs] [--folds-by time|runs] [--sensor drawn|coil] [--json FILE]\n", argv[0]);
       std::exit(2);
     }
     const std::string value = argv[++i];
@@ -117,6 +126,7 @@ Arguments parse(int argc, char** argv) {
     }
     else if (flag == "--training" && (value == "cycle" || value == "two-runs")) args.two_runs = value == "two-runs";
     else if (flag == "--folds-by") args.folds_by = parse_folds_by(value);
+    else if (flag == "--sensor" && (value == "drawn" || value == "coil")) args.sensor_on_coil = value == "coil";
     else if (flag == "--methods") {
       args.methods.clear();
       for (const auto& name : split(value)) args.methods.push_back(parse_method(name));
@@ -150,6 +160,8 @@ struct TestLog {
   std::string name;  // "next cycle", the programme's kind, or carried_test
   ChamberLog log;
   std::array<double, 3> floor{};
+  sim::ChamberRun run;             // the rows of `log`, with the true drift (for the oracle)
+  sim::LawRegressors regressors;   // the law's regressors on those rows (oracle only)
   // Set: judged from this row of `log` on, every filter and lag carried from its first row
   // (evaluate_from) instead of starting in equilibrium and settling.
   std::optional<std::size_t> carried_from_row;
@@ -157,7 +169,107 @@ struct TestLog {
 
 TestLog make_test(std::string name, const sim::ChamberRun& run) {
   const auto first_row = static_cast<std::size_t>(std::llround(settle_s * run.rate_hz));
-  return {std::move(name), sim::to_chamber_log(run), run.noise_floor(smoothing_s, first_row)};
+  return {std::move(name), sim::to_chamber_log(run), run.noise_floor(smoothing_s, first_row), run, {}};
+}
+
+// Rows [begin, end) of every regressor.
+sim::LawRegressors slice(const sim::LawRegressors& regressors, std::size_t begin, std::size_t end) {
+  sim::LawRegressors part;
+  for (std::size_t a = 0; a < 3; ++a) {
+    for (const auto& column : regressors[a]) {
+      part[a].emplace_back(column.begin() + static_cast<std::ptrdiff_t>(begin),
+                           column.begin() + static_cast<std::ptrdiff_t>(end));
+    }
+  }
+  return part;
+}
+
+// The 100 s trailing mean of a column at 1 Hz, from the first full window on (row
+// window - 1 of the input is row 0 of the output): what the pipeline smooths.
+std::vector<double> smoothed(const std::vector<double>& column, double rate_hz) {
+  TrailingMean mean(smoothing_s);
+  std::vector<double> out;
+  const auto window = static_cast<std::size_t>(std::llround(smoothing_s * rate_hz));
+  for (std::size_t k = 0; k < column.size(); ++k) {
+    const double value = mean.push(static_cast<double>(k) / rate_hz, column[k]);
+    if (k + 1 >= window) out.push_back(value);
+  }
+  return out;
+}
+
+// One axis of a run as the oracle sees it: smoothed regressors (columns) and gyro.
+struct OracleRows {
+  Eigen::MatrixXd x;
+  Eigen::VectorXd y;
+};
+
+OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& regressors, std::size_t axis) {
+  static constexpr std::array<std::string_view, 3> gyro_names = {"gyro_x", "gyro_y", "gyro_z"};
+  const std::vector<double> y = smoothed(run.column(gyro_names[axis]), run.rate_hz);
+  OracleRows rows{Eigen::MatrixXd(static_cast<Eigen::Index>(y.size()), sim::kLawRegressors),
+                  Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()))};
+  for (std::size_t j = 0; j < sim::kLawRegressors; ++j) {
+    const std::vector<double> column = smoothed(regressors[axis][j], run.rate_hz);
+    rows.x.col(static_cast<Eigen::Index>(j)) = Eigen::Map<const Eigen::VectorXd>(column.data(), rows.y.size());
+  }
+  return rows;
+}
+
+// The law's own structure on its true states, fitted by least squares on the training rows:
+// no identification error at all, only the coefficients left to one training log. What it
+// leaves held out is what the training log cannot tell apart (near-collinear terms under
+// its one ramp rate) plus the noise, so it bounds what any method could reach from that log.
+MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>>& training,
+                        const std::array<double, 3>& training_floor, const std::vector<TestLog>& tests) {
+  MethodResult result;
+  result.method = Method::oracle;
+  const Stopwatch clock;
+  result.tests.resize(tests.size());
+  for (std::size_t a = 0; a < 3; ++a) {
+    std::vector<OracleRows> parts;
+    Eigen::Index n = 0;
+    for (const auto& [run, regressors] : training) {
+      parts.push_back(oracle_rows(*run, *regressors, a));
+      n += parts.back().y.size();
+    }
+    Eigen::MatrixXd x(n, sim::kLawRegressors);
+    Eigen::VectorXd y(n);
+    Eigen::Index row = 0;
+    for (const auto& part : parts) {
+      x.middleRows(row, part.y.size()) = part.x;
+      y.segment(row, part.y.size()) = part.y;
+      row += part.y.size();
+    }
+    // Scaled columns; a regressor the law does not have is a column of zeros, which the
+    // rank-revealing QR leaves at zero.
+    Eigen::VectorXd scale = x.colwise().norm().transpose();
+    for (Eigen::Index j = 0; j < scale.size(); ++j) {
+      if (scale[j] == 0) scale[j] = 1;
+    }
+    const Eigen::MatrixXd scaled = x * scale.cwiseInverse().asDiagonal();
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(scaled);
+    qr.setThreshold(1e-12);
+    const Eigen::VectorXd beta = scale.cwiseInverse().asDiagonal() * Eigen::VectorXd(qr.solve(y));
+    result.in_sample[a] = (y - x * beta).squaredNorm() / static_cast<double>(n) / training_floor[a];
+    for (std::size_t j = 0; j < sim::kLawRegressors; ++j) {
+      if (beta[static_cast<Eigen::Index>(j)] != 0) result.terms[a].emplace_back(sim::law_regressor_names()[j]);
+    }
+    for (std::size_t t = 0; t < tests.size(); ++t) {
+      const OracleRows judged = oracle_rows(tests[t].run, tests[t].regressors, a);
+      // Judged from settle_s on, as the models are (the carried test: from its own row).
+      const std::size_t window = static_cast<std::size_t>(std::llround(smoothing_s * tests[t].run.rate_hz));
+      const std::size_t first_input_row =
+          tests[t].carried_from_row ? *tests[t].carried_from_row
+                                    : static_cast<std::size_t>(std::llround(settle_s * tests[t].run.rate_hz));
+      const auto first = static_cast<Eigen::Index>(first_input_row - (window - 1));
+      const Eigen::VectorXd residual = (judged.y - judged.x * beta).tail(judged.y.size() - first);
+      result.tests[t].mse[a] = residual.squaredNorm() / static_cast<double>(residual.size());
+      result.tests[t].floor[a] = tests[t].floor[a];
+      result.tests[t].ratio[a] = result.tests[t].mse[a] / tests[t].floor[a];
+    }
+  }
+  result.fit = clock.elapsed();
+  return result;
 }
 
 // Two distinct kinds of programme, drawn from the law's seed (the engine's raw output, which
@@ -215,30 +327,52 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   const Stopwatch law_clock;
   LawResult law;
   law.seed = seed;
-  const sim::UnitLaw unit = sim::draw_unit(seed);
-  const sim::ChamberRun training_run =
-      sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, seed, 2), sim::derive_seed(seed, 1));
+  sim::UnitLaw unit = sim::draw_unit(seed);
+  if (args.sensor_on_coil) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      unit.axes[a].sensor_axis = static_cast<int>(a);
+      unit.axes[a].sensor_node = static_cast<int>(unit.axes[a].node_time_constants_s.size()) - 1;
+      unit.axes[a].sensor_time_constant_s = 2;
+    }
+  }
+  const bool oracle = std::find(args.methods.begin(), args.methods.end(), Method::oracle) != args.methods.end();
+  auto regressors_of = [&](const sim::Setpoint& programme) {
+    return oracle ? sim::law_regressors(unit, programme) : sim::LawRegressors{};
+  };
+  const sim::Setpoint training_programme = sim::draw_profile(sim::ProfileKind::cycle, unit, seed, 2);
+  const sim::ChamberRun training_run = sim::simulate_unit(unit, training_programme, sim::derive_seed(seed, 1));
+  const sim::LawRegressors training_regressors = regressors_of(training_programme);
   const std::size_t second_cycle = training_run.cycle_start_rows().at(1);
   const sim::ChamberRun first = slice(training_run, 0, second_cycle);
+  const sim::LawRegressors first_regressors = oracle ? slice(training_regressors, 0, second_cycle) : sim::LawRegressors{};
   std::vector<ChamberLog> training{sim::to_chamber_log(first)};
+  std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>> oracle_training{{&first, &first_regressors}};
+  sim::ChamberRun second_run;
+  sim::LawRegressors second_regressors;
   if (args.two_runs) {
     const sim::Setpoint programme = sim::draw_profile(second_training_profile(seed), unit, sim::derive_seed(seed, 14));
-    training.push_back(sim::to_chamber_log(sim::simulate_unit(unit, programme, sim::derive_seed(seed, 4))));
+    second_run = sim::simulate_unit(unit, programme, sim::derive_seed(seed, 4));
+    second_regressors = regressors_of(programme);
+    training.push_back(sim::to_chamber_log(second_run));
+    oracle_training.emplace_back(&second_run, &second_regressors);
   }
   const std::array<double, 3> training_floor = first.noise_floor(smoothing_s);
 
   std::vector<TestLog> tests;
   tests.push_back(make_test("next cycle", slice(training_run, second_cycle, training_run.rows())));
+  if (oracle) tests.back().regressors = slice(training_regressors, second_cycle, training_run.rows());
   std::uint64_t stream = 2;
   for (sim::ProfileKind kind : other_profiles(seed)) {
     const sim::Setpoint programme = sim::draw_profile(kind, unit, sim::derive_seed(seed, 10 + stream));
     tests.push_back(make_test(sim::to_string(kind), sim::simulate_unit(unit, programme, sim::derive_seed(seed, stream))));
+    tests.back().regressors = regressors_of(programme);
     ++stream;
   }
   // A diagnostic beside the tests: cycle 2 judged on the same rows with the lags carried
   // over from cycle 1, as a running compensator would. Where it is much lower than "next
   // cycle", 1800 s of settling was too short for the model's lags, not the model wrong.
-  TestLog carried{carried_test, sim::to_chamber_log(training_run), tests.front().floor,
+  TestLog carried{carried_test, sim::to_chamber_log(training_run), tests.front().floor, training_run,
+                  training_regressors,
                   second_cycle + static_cast<std::size_t>(std::llround(settle_s * training_run.rate_hz))};
   tests.push_back(std::move(carried));
   for (const auto& test : tests) law.tests.push_back(test.name);
@@ -247,6 +381,10 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   std::vector<FeatureSelection> selections;
   for (Method method : args.methods) {
     if (interrupted.load()) break;
+    if (method == Method::oracle) {
+      law.methods.push_back(fit_oracle(oracle_training, training_floor, tests));
+      continue;
+    }
     MethodResult result;
     result.method = method;
     try {

@@ -23,6 +23,7 @@ enum class Method {
   linear,    // --features auto, least squares
   stepwise,  // --features auto, stepwise regression
   svr,       // --features auto, SVR + AFSA
+  oracle,    // the law's own regressors on its true states, least squares: a bound, not a method
 };
 
 inline const char* to_string(Method method) {
@@ -31,15 +32,16 @@ inline const char* to_string(Method method) {
     case Method::linear: return "linear";
     case Method::stepwise: return "stepwise";
     case Method::svr: return "svr";
+    case Method::oracle: return "oracle";
   }
   return "paper";
 }
 
 inline Method parse_method(const std::string& name) {
-  for (Method method : {Method::paper, Method::linear, Method::stepwise, Method::svr}) {
+  for (Method method : {Method::paper, Method::linear, Method::stepwise, Method::svr, Method::oracle}) {
     if (name == to_string(method)) return method;
   }
-  throw std::invalid_argument(fmt::format("unknown method '{}' (paper, linear, stepwise or svr)", name));
+  throw std::invalid_argument(fmt::format("unknown method '{}' (paper, linear, stepwise, svr or oracle)", name));
 }
 
 // The calibrate model of a method.

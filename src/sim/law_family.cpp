@@ -326,6 +326,26 @@ Setpoint draw_profile(ProfileKind kind, const UnitLaw& unit, std::uint64_t seed,
 
 // ---------------------------------------------------------------- the unit in time
 
+std::array<std::string_view, kLawRegressors> law_regressor_names() {
+  return {"bias", "dTc", "dTc^2", "dTc^3", "step", "coil_rate", "axial_gradient", "axial_gradient_rate",
+          "radial_gradient_rate", "memory", "play", "turn_on"};
+}
+
+std::array<double, kLawRegressors> law_coefficients(const AxisLaw& law) {
+  return {law.bias_dph,
+          law.polynomial[0],
+          law.polynomial[1],
+          law.polynomial[2],
+          law.step_dph,
+          law.rate_dph,
+          law.axial_gradient_dph,
+          law.axial_gradient_rate_dph,
+          law.radial_gradient_rate_dph,
+          law.hysteresis_dph,
+          law.hysteresis_dph,
+          law.turn_on_dph};
+}
+
 namespace {
 
 // The thermal state of the whole unit: the case, each axis' chain, each sensor, and the
@@ -360,29 +380,38 @@ class UnitPhysics {
 
   double sensor_c(std::size_t a) const { return state_[sensor_ + 3 * a]; }
 
-  // True drift (°/h) of axis a at time t (s since power-on) with the air at `air_c`.
-  double drift_dph(std::size_t a, double t, double air_c) const {
+  // The law's regressors for axis a at time t (s since power-on) with the air at `air_c`:
+  // the true internal states each term of its drift multiplies (law_regressor_names).
+  std::array<double, kLawRegressors> regressors(std::size_t a, double t, double air_c) const {
     std::vector<double> rate(state_.size());
     derivative(state_, air_c, rate);
     const AxisLaw& law = unit_.axes[a];
     const std::size_t coil = coil_index(a);
     const double tc = state_[coil];
     const double delta = tc - unit_.reference_c;
-    double drift = law.bias_dph + law.polynomial[0] * delta + law.polynomial[1] * delta * delta +
-                   law.polynomial[2] * delta * delta * delta;
-    if (law.shape == StaticShape::tanh_step) {
-      drift += law.step_dph * std::tanh((tc - law.step_centre_c) / law.step_width_c);
-    }
     const double coil_rate = rate[coil] * 60.0;  // °C/min
-    drift += law.rate_dph * coil_rate;
     const std::size_t upstream = law.node_time_constants_s.size() == 1 ? 0 : coil - 1;
     const double upstream_c = state_[upstream] + (upstream == 0 ? law.self_heating_c * powered_ : 0.0);
-    drift += law.axial_gradient_dph * (upstream_c - tc);
-    drift += law.axial_gradient_rate_dph * (rate[upstream] * 60.0 - coil_rate);
-    drift += law.radial_gradient_rate_dph * rate[radial(a)] * 60.0;
-    if (law.hysteresis == HysteresisKind::memory) drift += law.hysteresis_dph * state_[memory(a)];
-    if (law.hysteresis == HysteresisKind::play) drift += law.hysteresis_dph * (tc - play_[a]) / law.hysteresis_width_c;
-    drift += law.turn_on_dph * std::exp(-t / law.turn_on_time_constant_s);
+    return {1.0,
+            delta,
+            delta * delta,
+            delta * delta * delta,
+            law.shape == StaticShape::tanh_step ? std::tanh((tc - law.step_centre_c) / law.step_width_c) : 0.0,
+            coil_rate,
+            upstream_c - tc,
+            rate[upstream] * 60.0 - coil_rate,
+            rate[radial(a)] * 60.0,
+            law.hysteresis == HysteresisKind::memory ? state_[memory(a)] : 0.0,
+            law.hysteresis == HysteresisKind::play ? (tc - play_[a]) / law.hysteresis_width_c : 0.0,
+            std::exp(-t / law.turn_on_time_constant_s)};
+  }
+
+  // True drift (°/h) of axis a: the law's coefficients on its regressors.
+  double drift_dph(std::size_t a, double t, double air_c) const {
+    const auto x = regressors(a, t, air_c);
+    const auto c = law_coefficients(unit_.axes[a]);
+    double drift = 0;
+    for (std::size_t k = 0; k < kLawRegressors; ++k) drift += c[k] * x[k];
     return drift;
   }
 
@@ -519,11 +548,19 @@ class LawAxisNoise {
 
 }  // namespace
 
-ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed, double rate_hz) {
+namespace {
+
+std::size_t programme_rows(const Setpoint& setpoint, double rate_hz) {
   if (!(rate_hz > 0 && rate_hz <= 100)) throw UsageError("the law family simulates at 0..100 Hz");
   if (setpoint.time_s.size() < 2) throw UsageError("a programme needs at least two knots");
+  return static_cast<std::size_t>(std::floor(setpoint.duration_s() * rate_hz + 1e-9)) + 1;
+}
+
+}  // namespace
+
+ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed, double rate_hz) {
+  const std::size_t rows = programme_rows(setpoint, rate_hz);
   const double dt = 1.0 / rate_hz;
-  const auto rows = static_cast<std::size_t>(std::floor(setpoint.duration_s() * rate_hz + 1e-9)) + 1;
   ChamberRun run;
   run.rate_hz = rate_hz;
   run.cycle_start_s = setpoint.cycle_start_s;
@@ -547,6 +584,24 @@ ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uin
     physics.step(t, dt, setpoint);
   }
   return run;
+}
+
+LawRegressors law_regressors(const UnitLaw& unit, const Setpoint& setpoint, double rate_hz) {
+  const std::size_t rows = programme_rows(setpoint, rate_hz);
+  const double dt = 1.0 / rate_hz;
+  LawRegressors out;
+  for (auto& axis : out) axis.assign(kLawRegressors, std::vector<double>(rows));
+  UnitPhysics physics(unit, setpoint.temperature(0));
+  for (std::size_t k = 0; k < rows; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    const double air = setpoint.temperature(t);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto x = physics.regressors(a, t, air);
+      for (std::size_t j = 0; j < kLawRegressors; ++j) out[a][j][k] = x[j];
+    }
+    physics.step(t, dt, setpoint);
+  }
+  return out;
 }
 
 }  // namespace thermodrift::sim

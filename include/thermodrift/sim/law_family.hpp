@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "thermodrift/sim/chamber_run.hpp"
@@ -118,5 +119,18 @@ Setpoint draw_profile(ProfileKind kind, const UnitLaw& unit, std::uint64_t seed,
 // programme, sampled at rate_hz: the columns of chamber_run_columns.
 ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed,
                          double rate_hz = 1.0);
+
+// The law's own regressors: the true internal states each term of an axis' drift multiplies
+// (1, ΔTc, ΔTc², ΔTc³, the tanh step, dTc/dt, the axial gradient and its rate, the radial
+// gradient's rate, the memory, the play, the turn-on transient), noise-free, row by row
+// through the programme as simulate_unit runs it. The drift is law_coefficients · these,
+// exactly. A least-squares fit of a log's gyro on them is what an identification could at
+// best reach: the right structure on the true states, only the coefficients left to the
+// data (bench/generalization_bench --methods oracle).
+inline constexpr std::size_t kLawRegressors = 12;
+std::array<std::string_view, kLawRegressors> law_regressor_names();
+std::array<double, kLawRegressors> law_coefficients(const AxisLaw& law);
+using LawRegressors = std::array<std::vector<std::vector<double>>, 3>;  // [axis][regressor][row]
+LawRegressors law_regressors(const UnitLaw& unit, const Setpoint& setpoint, double rate_hz = 1.0);
 
 }  // namespace thermodrift::sim

@@ -388,6 +388,59 @@ TEST(LawPhysics, TheMemoryStateFollowsTheRateAndFadesInASoak) {
   EXPECT_NEAR(drift[32400], law.bias_dph, 1e-6);
 }
 
+// The law's regressors are the states simulate_unit evaluates the drift on: their product
+// with the law's coefficients is the drift column to the last rounding, on drawn units
+// with every kind of term, and a term the law lacks is a column of zeros.
+TEST(LawRegressors, TheirProductWithTheCoefficientsIsTheSimulatedDrift) {
+  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    const UnitLaw unit = draw_unit(seed);
+    const Setpoint programme = draw_profile(ProfileKind::staircase, unit, seed);
+    const ChamberRun run = simulate_unit(unit, programme, 7);
+    const LawRegressors regressors = law_regressors(unit, programme);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto& drift = run.column(std::string("drift_") + "xyz"[a]);
+      ASSERT_EQ(regressors[a].size(), kLawRegressors);
+      ASSERT_EQ(regressors[a][0].size(), drift.size());
+      const auto c = law_coefficients(unit.axes[a]);
+      double worst = 0;
+      for (std::size_t row = 0; row < drift.size(); row += 7) {
+        double sum = 0;
+        for (std::size_t j = 0; j < kLawRegressors; ++j) sum += c[j] * regressors[a][j][row];
+        worst = std::max(worst, std::abs(sum - drift[row]));
+      }
+      EXPECT_LT(worst, 1e-12) << "law " << seed << " axis " << a;
+      const auto zeros = [&](std::size_t j) {
+        return std::all_of(regressors[a][j].begin(), regressors[a][j].end(), [](double v) { return v == 0; });
+      };
+      const auto& law = unit.axes[a];
+      EXPECT_EQ(zeros(4), law.shape != StaticShape::tanh_step) << "the tanh step";
+      EXPECT_EQ(zeros(9), law.hysteresis != HysteresisKind::memory) << "the memory";
+    }
+  }
+}
+
+// On the hand-built unit's ramp the regressors take their closed forms: ΔTc, the coil's rate
+// in °C/min, no gradient upstream beyond the coil's lag, the turn-on decay from power-on.
+TEST(LawRegressors, OnASteadyRampTheyTakeTheirClosedForms) {
+  const UnitLaw unit = hand_built_unit();
+  const LawRegressors regressors = law_regressors(unit, ramp_then_soak());
+  const auto names = law_regressor_names();
+  ASSERT_EQ(names[1], "dTc");
+  ASSERT_EQ(names[5], "coil_rate");
+  const std::size_t row = 10000;
+  const double air = -30 + kRampRate * 10000;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double tau = unit.axes[a].node_time_constants_s[0];
+    const double coil = air - kRampRate * (unit.case_time_constant_s + tau);
+    EXPECT_NEAR(regressors[a][0][row], 1.0, 0) << a;
+    EXPECT_NEAR(regressors[a][1][row], coil - unit.reference_c, 1e-3) << a;
+    EXPECT_NEAR(regressors[a][2][row], (coil - unit.reference_c) * (coil - unit.reference_c), 0.1) << a;
+    EXPECT_NEAR(regressors[a][5][row], kRampRate * 60, 1e-5) << a;
+    EXPECT_NEAR(regressors[a][6][row], kRampRate * tau, 1e-3) << "the case leads the coil by rate times τ";
+    EXPECT_NEAR(regressors[a][11][row], std::exp(-10000.0 / unit.axes[a].turn_on_time_constant_s), 1e-15) << a;
+  }
+}
+
 // The chain's time constants shorter than the sample interval stay stable: RK4 substeps.
 TEST(LawPhysics, ASampleIntervalLongerThanTheSensorLagStaysStable) {
   const UnitLaw unit = hand_built_unit();  // sensor lag 0.2 s
