@@ -4,7 +4,8 @@
 //   build/bin/generalization_bench [--seeds acceptance|development|S,S,...] [--limit N]
 //                                  [--methods paper,linear,stepwise,svr,oracle] [--threads N]
 //                                  [--evaluations N] [--training cycle|two-runs]
-//                                  [--folds-by time|runs] [--sensor drawn|coil] [--json FILE]
+//                                  [--folds-by time|runs] [--sensor drawn|coil]
+//                                  [--oracle-without NAME,...] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
 // is the training log, cycle 2 the "next cycle". Two other profiles of two distinct
@@ -17,7 +18,8 @@
 // user with two chamber runs would fit them (--data twice). The `oracle` row is a bound, not
 // a method: least squares on the law's own regressors and true states (sim::law_regressors),
 // so only the coefficients come from the training log. --sensor coil (a diagnostic) puts
-// every thermometer on its own coil. docs/generalization.md says what the methods are and
+// every thermometer on its own coil; --oracle-without NAME,... leaves regressors out of the
+// oracle. docs/generalization.md says what the methods are and
 // has measured figures.
 #include <time.h>
 
@@ -91,6 +93,7 @@ struct Arguments {
   // A diagnostic, not a test: each axis' sensor moved onto its own coil (2 s), so the
   // temperature column is the coil's and no thermal path lies between them.
   bool sensor_on_coil = false;
+  std::vector<std::size_t> oracle_without;  // regressors the oracle leaves out (sim::law_regressor_names)
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -111,7 +114,7 @@ Arguments parse(int argc, char** argv) {
     if (i + 1 >= argc) {
       fmt::print(stderr, "usage: {} [--seeds acceptance|development|S,S,...] [--limit N] [--methods "
                          "paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] [--identify greedy|thermal-node] "
-                         "[--training cycle|two-runs] [--folds-by time|runs] [--sensor drawn|coil] [--json FILE]\n", argv[0]);
+                         "[--training cycle|two-runs] [--folds-by time|runs] [--sensor drawn|coil] [--oracle-without NAME,...] [--json FILE]\n", argv[0]);
       std::exit(2);
     }
     const std::string value = argv[++i];
@@ -127,6 +130,14 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--training" && (value == "cycle" || value == "two-runs")) args.two_runs = value == "two-runs";
     else if (flag == "--folds-by") args.folds_by = parse_folds_by(value);
     else if (flag == "--sensor" && (value == "drawn" || value == "coil")) args.sensor_on_coil = value == "coil";
+    else if (flag == "--oracle-without") {
+      const auto names = sim::law_regressor_names();
+      for (const auto& name : split(value)) {
+        const auto found = std::find(names.begin(), names.end(), name);
+        if (found == names.end()) throw std::invalid_argument(fmt::format("unknown regressor '{}'", name));
+        args.oracle_without.push_back(static_cast<std::size_t>(found - names.begin()));
+      }
+    }
     else if (flag == "--methods") {
       args.methods.clear();
       for (const auto& name : split(value)) args.methods.push_back(parse_method(name));
@@ -219,8 +230,10 @@ OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& reg
 // no identification error at all, only the coefficients left to one training log. What it
 // leaves held out is what the training log cannot tell apart (near-collinear terms under
 // its one ramp rate) plus the noise, so it bounds what any method could reach from that log.
+// `without`: regressors left out (--oracle-without), to see which physics a method must capture.
 MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>>& training,
-                        const std::array<double, 3>& training_floor, const std::vector<TestLog>& tests) {
+                        const std::array<double, 3>& training_floor, const std::vector<TestLog>& tests,
+                        const std::vector<std::size_t>& without) {
   MethodResult result;
   result.method = Method::oracle;
   const Stopwatch clock;
@@ -246,6 +259,7 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
     for (Eigen::Index j = 0; j < scale.size(); ++j) {
       if (scale[j] == 0) scale[j] = 1;
     }
+    for (const std::size_t j : without) x.col(static_cast<Eigen::Index>(j)).setZero();
     const Eigen::MatrixXd scaled = x * scale.cwiseInverse().asDiagonal();
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(scaled);
     qr.setThreshold(1e-12);
@@ -382,7 +396,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   for (Method method : args.methods) {
     if (interrupted.load()) break;
     if (method == Method::oracle) {
-      law.methods.push_back(fit_oracle(oracle_training, training_floor, tests));
+      law.methods.push_back(fit_oracle(oracle_training, training_floor, tests, args.oracle_without));
       continue;
     }
     MethodResult result;
