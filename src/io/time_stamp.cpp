@@ -72,6 +72,14 @@ bool parse_decimal(std::string_view cell, int unit_exponent, TimeStamp& stamp, s
     at = static_cast<std::size_t>(result.ptr - cell.data());
   }
   if (at != cell.size()) return fail(fmt::format("'{}' is not a number", excerpt(cell)));
+  // An exponent beyond any number of digits a line can hold: too large a time, or one below
+  // an attosecond (0). Settled here, before the sum below that it would overflow.
+  constexpr long kMaxExponent = 1'000'000'000;
+  if (exponent > kMaxExponent) return fail(fmt::format("'{}' is out of the range of a time", excerpt(cell)));
+  if (exponent < -kMaxExponent) {
+    stamp = TimeStamp{};
+    return true;
+  }
 
   // The digits with the decimal point `position` digits from their start, in seconds.
   const auto first = std::min(digits.find_first_not_of('0'), digits.size());
@@ -82,6 +90,7 @@ bool parse_decimal(std::string_view cell, int unit_exponent, TimeStamp& stamp, s
   if (position > kMaxIntegerDigits) {
     return fail(fmt::format("'{}' is out of the range of a time (10^{} s or more)", excerpt(cell), kMaxIntegerDigits));
   }
+  if (position < -kAttoDigits) return true;  // below an attosecond: 0, without a string of zeros as long
   const auto length = static_cast<long>(significant.size());
   for (long i = 0; i < position; ++i) stamp.seconds = stamp.seconds * 10 + (i < length ? significant[static_cast<std::size_t>(i)] - '0' : 0);
   std::string fraction(static_cast<std::size_t>(std::max(0L, -position)), '0');

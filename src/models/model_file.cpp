@@ -184,8 +184,20 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
       if (!options.IsValid(&why)) throw fail(why);
       model.despike = options;
       if (despike.contains("replaced_in_training")) {
-        model.despiked_gyro = despike["replaced_in_training"].value("gyro", std::vector<std::size_t>{});
-        model.despiked_temperature = despike["replaced_in_training"].value("temperature", std::vector<std::size_t>{});
+        const auto& replaced = despike.at("replaced_in_training");
+        if (!replaced.is_object()) throw fail("despike \"replaced_in_training\" must be an object");
+        // Counts, each checked: nlohmann's own conversion of -5.8 to an unsigned is undefined.
+        auto counts = [&](const char* key) {
+          std::vector<std::size_t> out;
+          if (!replaced.contains(key)) return out;
+          if (!replaced.at(key).is_array()) throw fail(fmt::format("despike replaced_in_training {} must be a list", key));
+          for (const auto& count : replaced.at(key)) {
+            out.push_back(json_integer<std::size_t>(count, fmt::format("despike replaced_in_training {}", key)));
+          }
+          return out;
+        };
+        model.despiked_gyro = counts("gyro");
+        model.despiked_temperature = counts("temperature");
       }
     }
     if (json.contains("extra_temperature_columns")) {

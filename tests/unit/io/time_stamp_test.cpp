@@ -85,6 +85,21 @@ TEST(TimeStamp, NumbersThatAreNotTimes) {
   EXPECT_NE(problem_of("1e30").find("out of the range"), std::string::npos);
 }
 
+// Long fuzzing found "2026E-2435010336759301097": the reader built a string of 2.4e18
+// zeros for the fraction. Exponents that no line's digits can reach are settled first:
+// below an attosecond is 0, above the range an error, and neither allocates.
+TEST(TimeStamp, HugeExponentsAreSettledWithoutBuildingTheDigits) {
+  EXPECT_EQ(read("2026E-2435010336759301097"), TimeStamp{});
+  EXPECT_EQ(read("-7e-9223372036854775807"), TimeStamp{});
+  EXPECT_EQ(read("1e-19"), TimeStamp{});
+  EXPECT_EQ(read("1e-18").attoseconds, 1);
+  EXPECT_EQ(read("123456e-23").attoseconds, 1);
+  EXPECT_EQ(read("5e-3", TimeUnit::ns).attoseconds, 5'000'000);  // 5e-12 s
+  EXPECT_NE(problem_of("1e9223372036854775807").find("out of the range"), std::string::npos);
+  EXPECT_NE(problem_of("1e2000000000").find("out of the range"), std::string::npos);
+  EXPECT_NE(problem_of("1e99999999999999999999").find("out of the range"), std::string::npos);
+}
+
 TEST(DaysFromCivil, AgreesWithTheStandardCalendar) {
   for (const auto& [year, month, day] : {std::tuple{1970, 1u, 1u}, {2000, 2u, 29u}, {2026, 3u, 7u}, {1969, 12u, 31u},
                                          {2100, 3u, 1u}, {1600, 1u, 1u}}) {

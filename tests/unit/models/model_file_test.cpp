@@ -189,6 +189,12 @@ TEST(ModelFile, DespikeRoundTripsIntoTheLogSpecAndIsChecked) {
       {"despike sigmas must be a number", {{"sigmas", "six"}}},
       {"despike threshold must be a positive", {{"sigmas", 0}}},
       {"must hold \"window\" and \"sigmas\"", {{"window", nullptr}}},
+      // Long fuzzing found a negative count converted to an unsigned (undefined behaviour).
+      {"despike replaced_in_training temperature must be an integer from 0",
+       {{"replaced_in_training", {{"temperature", {10, -5.818583831893798}}}}}},
+      {"despike replaced_in_training gyro must be an integer from 0", {{"replaced_in_training", {{"gyro", {1.5}}}}}},
+      {"despike replaced_in_training gyro must be a list", {{"replaced_in_training", {{"gyro", 3}}}}},
+      {"\"replaced_in_training\" must be an object", {{"replaced_in_training", {1, 2}}}},
   };
   for (const auto& [what, patch] : bad) {
     auto edited = json;
