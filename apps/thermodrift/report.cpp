@@ -17,6 +17,7 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/io/csv_reader.hpp"
+#include "thermodrift/io/time_stamp.hpp"
 #include "thermodrift/sim/chamber_run.hpp"
 #include "thermodrift/report/report.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
@@ -31,7 +32,7 @@ struct ReportArguments {
   DataOptions data;
   std::string out;
   std::optional<double> holdout_fraction;
-  std::optional<double> split_time;
+  std::optional<std::string> split_time;
   std::uint64_t seed = 1;
   int threads = 1;
   long evaluations = 100;
@@ -65,11 +66,10 @@ int run_report(const ReportArguments& args) {
   options.out_dir = args.out;
   options.study.calibration.smooth_seconds = args.data.smooth;
   if (args.split_time) {
-    // S is on the log's clock (its time column in s); the log's times count from its first row.
-    const double origin = log.time_origin ? log.time_origin->stamp.approximate_seconds() : 0.0;
-    const auto row = std::lower_bound(log.time.begin(), log.time.end(), *args.split_time - origin) - log.time.begin();
-    options.study.split_row = static_cast<std::size_t>(row);
-    options.study.split_description = fmt::format("held out from t = {:g} s on (--split-time)", *args.split_time);
+    options.study.split_row = row_at_time(log, *args.split_time);
+    options.study.split_description = fmt::format("held out from t = {} on (--split-time)",
+                                                  looks_like_iso_8601(*args.split_time) ? *args.split_time
+                                                                                        : *args.split_time + " s");
   } else if (args.holdout_fraction) {
     if (!(*args.holdout_fraction > 0 && *args.holdout_fraction < 1)) {
       throw UsageError(fmt::format("--holdout-fraction {} is not in (0, 1)", *args.holdout_fraction));
@@ -143,8 +143,8 @@ Command add_report(CLI::App& parent) {
   auto* fraction = app->add_option_function<double>(
       "--holdout-fraction", [args](double f) { args->holdout_fraction = f; },
       "the last fraction of the log held out (default 0.3)");
-  app->add_option_function<double>("--split-time", [args](double s) { args->split_time = s; },
-                                   "hold out the log from this time (s) on")
+  app->add_option_function<std::string>("--split-time", [args](const std::string& s) { args->split_time = s; },
+                                        "hold out the log from this time on: s on its clock, or an ISO 8601 stamp")
       ->excludes(fraction);
   app->add_option("--seed", args->seed, "seed of every random choice (recorded in the report)")->check(kSeed);
   add_list_option(*app, "--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md");

@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/time_stamp.hpp"
 
 namespace thermodrift {
 
@@ -74,6 +76,21 @@ Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& 
     }
   }
   return study;
+}
+
+std::size_t row_at_time(const ChamberLog& log, std::string_view when) {
+  TimeStamp at;
+  std::string problem;
+  if (!parse_time_stamp(when, TimeUnit::s, at, &problem)) throw UsageError("--split-time: " + problem);
+  double since_first_row = at.approximate_seconds();
+  if (log.time_origin) {
+    since_first_row = at.seconds_since(log.time_origin->stamp);  // exact: epochs keep their last digit
+  } else if (looks_like_iso_8601(when)) {
+    throw UsageError(fmt::format("--split-time {}: the log has no time column, so give seconds from its first row",
+                                 when));
+  }
+  return static_cast<std::size_t>(std::lower_bound(log.time.begin(), log.time.end(), since_first_row) -
+                                  log.time.begin());
 }
 
 }  // namespace thermodrift

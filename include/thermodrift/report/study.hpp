@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "thermodrift/io/chamber_log.hpp"
@@ -47,5 +48,11 @@ struct Study {
 };
 
 Study run_study(const ChamberLog& log, const LogSpec& spec, const StudyOptions& options);
+
+// The first row at or after `when` (report --split-time): a number of seconds on the log's
+// own clock (its time column in s; from the first row when it has none), or an ISO 8601
+// stamp for a log whose time column holds stamps (or epoch times). UsageError when it is
+// neither, or a stamp for a log without a time column.
+std::size_t row_at_time(const ChamberLog& log, std::string_view when);
 
 }  // namespace thermodrift
