@@ -119,7 +119,7 @@ bool Swim(Swarm& swarm, const Afsa::Options& options, int iteration, std::uint64
     }
   std::vector<bool> swarm_succeeds(fish_count, false);
   if (!batch.empty()) {
-    const auto centre_values = evaluator.Evaluate(batch);
+    const auto centre_values = evaluator.evaluate(batch);
     if (evaluator.should_stop()) return false;
     for (std::size_t k = 0; k < owner.size(); ++k)
       swarm_succeeds[owner[k]] = centre_values[k] < swarm.values[owner[k]];
@@ -143,7 +143,7 @@ bool Swim(Swarm& swarm, const Afsa::Options& options, int iteration, std::uint64
         owner.push_back(i);
       }
     if (batch.empty()) break;
-    const auto probe_values = evaluator.Evaluate(batch);
+    const auto probe_values = evaluator.evaluate(batch);
     if (evaluator.should_stop()) return false;
     for (std::size_t k = 0; k < owner.size(); ++k) {
       FishPlan& plan = plans[owner[k]];
@@ -165,7 +165,7 @@ bool Swim(Swarm& swarm, const Afsa::Options& options, int iteration, std::uint64
       batch.push_back(std::move(candidate));
       owner.push_back(i);
     }
-  const auto candidate_values = evaluator.Evaluate(batch);
+  const auto candidate_values = evaluator.evaluate(batch);
   if (evaluator.should_stop()) return false;
   std::vector<bool> moved(fish_count, false);
   for (std::size_t k = 0; k < owner.size(); ++k) {
@@ -238,7 +238,7 @@ OptimizationResult Afsa::optimize(const Objective& objective, const Box& box,
     swarm.positions.push_back(random.unit_cube_point(box.dimension()));
   }
   evaluator.set_iteration(0, 0.0);
-  swarm.values = evaluator.Evaluate(swarm.positions);
+  swarm.values = evaluator.evaluate(swarm.positions);
   if (evaluator.should_stop()) return evaluator.Result(Termination::budget_exhausted, 0);
 
   int completed = 0;

@@ -25,7 +25,7 @@ double Sanitize(double value) { return std::isnan(value) ? BatchEvaluator::kNotE
 
 BatchEvaluator::BatchEvaluator(const Objective& objective, const Box& box, const RunControl& control)
     : objective_(objective), box_(box), control_(control), start_(std::chrono::steady_clock::now()) {
-  box_.Validate();
+  box_.validate();
   std::string why;
   if (!control_.IsValid(&why)) throw UsageError(why);
   if (!objective_) throw UsageError("optim: the objective is empty");
@@ -58,11 +58,11 @@ void BatchEvaluator::Report(double best, long evaluations) {
   if (!control_.callback(progress)) stopped_by_callback_ = true;
 }
 
-double BatchEvaluator::Evaluate(const Eigen::VectorXd& unit_point) {
-  return Evaluate(std::vector<Eigen::VectorXd>{unit_point}).front();
+double BatchEvaluator::evaluate(const Eigen::VectorXd& unit_point) {
+  return evaluate(std::vector<Eigen::VectorXd>{unit_point}).front();
 }
 
-std::vector<double> BatchEvaluator::Evaluate(const std::vector<Eigen::VectorXd>& unit_points) {
+std::vector<double> BatchEvaluator::evaluate(const std::vector<Eigen::VectorXd>& unit_points) {
   const std::size_t count = unit_points.size();
   std::vector<double> values(count, kNotEvaluated);
   if (count == 0 || should_stop()) return values;

@@ -39,7 +39,7 @@ bool Box::IsValid(std::string* why) const {
   return true;
 }
 
-void Box::Validate() const {
+void Box::validate() const {
   std::string why;
   if (!IsValid(&why)) throw UsageError(why);
 }

@@ -60,7 +60,7 @@ bool EvaluateGrid(const std::vector<Axis>& axes, const std::vector<int>& order, 
     if (d < 0) break;
   }
   for (const auto& level : levels) {
-    evaluator.Evaluate(level);
+    evaluator.evaluate(level);
     if (evaluator.should_stop()) return false;
   }
   return true;
@@ -106,7 +106,7 @@ std::vector<int> GridSearch::CoarseFirstOrder(int count) {
 
 OptimizationResult GridSearch::optimize(const Objective& objective, const Box& box,
                                         const RunControl& control) const {
-  box.Validate();
+  box.validate();
   const int count = options_.points_per_dimension;
   const auto dim = box.dimension();
   double grid_points = std::pow(static_cast<double>(count), static_cast<double>(dim));

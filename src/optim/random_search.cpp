@@ -37,7 +37,7 @@ OptimizationResult RandomSearch::optimize(const Objective& objective, const Box&
       batch.push_back(RandomStream(control.seed, 0, static_cast<std::uint64_t>(k))
                           .unit_cube_point(box.dimension()));
     evaluator.set_iteration(batches, static_cast<double>(drawn) / static_cast<double>(options_.samples));
-    evaluator.Evaluate(batch);
+    evaluator.evaluate(batch);
     drawn += size;
     if (!evaluator.should_stop()) ++batches;
   }

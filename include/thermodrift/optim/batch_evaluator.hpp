@@ -31,8 +31,8 @@ class BatchEvaluator {
   // f at each point, given in unit-cube coordinates. A point that could not be evaluated
   // (budget exhausted, callback stop) gets kNotEvaluated (+infinity), as does a NaN value.
   // Check should_stop() after every call. Rethrows the first exception of the objective.
-  std::vector<double> Evaluate(const std::vector<Eigen::VectorXd>& unit_points);
-  double Evaluate(const Eigen::VectorXd& unit_point);
+  std::vector<double> evaluate(const std::vector<Eigen::VectorXd>& unit_points);
+  double evaluate(const Eigen::VectorXd& unit_point);
 
   // True once the budget is spent or the callback said stop.
   bool should_stop() const { return stopped_by_callback_ || budget_exhausted(); }

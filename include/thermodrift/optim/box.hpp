@@ -34,7 +34,7 @@ struct Box {
   // lower <= upper, and log dimensions have lower > 0.
   bool IsValid(std::string* why) const;
   // Throws UsageError with the reason when !IsValid.
-  void Validate() const;
+  void validate() const;
 
   // Unit cube -> user coordinates. u is clamped to [0, 1] first, and the result to
   // [lower, upper], so rounding in pow() can never leave the box.

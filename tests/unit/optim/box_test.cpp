@@ -60,7 +60,7 @@ TEST(Box, IsValidRejectsBadBoxes) {
   EXPECT_FALSE(Box(Eigen::Vector2d(0.1, 1.0), Eigen::Vector2d(1.0, 2.0), {true}).IsValid(&why));
   EXPECT_FALSE(Box(Eigen::Vector2d(0.0, -INFINITY), Eigen::Vector2d(1.0, 2.0)).IsValid(&why));
   EXPECT_FALSE(Box().IsValid(&why));
-  EXPECT_THROW(Box().Validate(), UsageError);
+  EXPECT_THROW(Box().validate(), UsageError);
 }
 
 }  // namespace
