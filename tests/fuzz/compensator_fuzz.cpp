@@ -36,9 +36,6 @@ DriftModel fit(const thermodrift::ChamberLog& log, const std::string& model, std
   options.terms = std::move(terms);
   options.svr.C = 10;
   options.svr.gamma = 0.5;
-  // Reduced to 16 vectors like the C header target's: the streams are what is fuzzed, and
-  // a full SVR's kernel sum (hundreds of vectors) held the target at ~700 inputs/s.
-  options.max_vectors = 16;
   return thermodrift::calibrate({log}, {}, options).model;
 }
 
