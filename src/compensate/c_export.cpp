@@ -332,7 +332,7 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
                    fmt::format("channel->mean_ring[(channel->mean_head + i) % {}_MEAN_CAPACITY].value", P))}});
 
   // The feature terms' lags: TermEvaluator, operation for operation.
-  out += render(kFilterFunctions, {{"p", p}, {"exp", exp_name}, {"scale", Literal::time(kDirectionRateScale)}});
+  out += render(kFilterFunctions, {{"p", p}, {"exp", exp_name}});
 
   if (raw) {
     out += render(kStepRawPrologue, {{"p", p}, {"P", P}, {"unit", to_string(model.gyro_unit)}});

@@ -71,8 +71,8 @@ FactorCode factor_code(const FeatureFactor& factor, const FactorPlace& place) {
       break;
     case Kind::direction:
       code = {"",
-              fmt::format("{}_direction({}, delta_t, rate, {}, {}, {})", p, s, place.step, Literal::time(atom.tau),
-                          Literal::time(atom.tau2)),
+              fmt::format("{}_direction({}, delta_t, rate, {}, {}, {}, {})", p, s, place.step, Literal::time(atom.tau),
+                          Literal::time(atom.tau2), Literal::time(atom.direction_rate_scale())),
               atom.tau2 > 0 ? std::size_t{3} : std::size_t{2}, atom.tau2 > 0 ? std::size_t{14} : std::size_t{9}};
       break;
     case Kind::channel_gradient:

@@ -303,12 +303,12 @@ static inline @p@_real @p@_gradient_rate(@p@_real state[2], @p@_real delta_t, do
   return (@p@_real)((coil_rate - state[1]) / tau_gradient * 60.0);
 }
 
-/* dir:TAU[:LAG]: a TAU-lag (state[1]) of tanh(r / @scale@ degC/min), tanh through exp;
- * r is the smoothed rate, or lagrate:LAG when LAG > 0 */
+/* dir:TAU[:LAG[:R0]]: a TAU-lag (state[1]) of tanh(r / scale), scale = R0 degC/min, tanh
+ * through exp; r is the smoothed rate, or lagrate:LAG when LAG > 0 */
 static inline @p@_real @p@_direction(@p@_real state[2], @p@_real delta_t, @p@_real rate,
-                                     double step_seconds, double tau, double lag) {
+                                     double step_seconds, double tau, double lag, double scale) {
   const double source = lag > 0 ? (double)@p@_lag_rate(&state[0], delta_t, step_seconds, lag) : (double)rate;
-  const double x = source / @scale@;
+  const double x = source / scale;
   state[1] = @p@_lag(state[1], (@p@_real)(1.0 - 2.0 / (exp(2.0 * x) + 1.0)), step_seconds, tau);
   return state[1];
 }

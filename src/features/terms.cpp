@@ -17,12 +17,13 @@ namespace thermodrift {
 namespace {
 
 constexpr std::string_view kKnownTerms =
-    "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG], grad:A-B, gradrate:A-B, "
+    "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, "
     "hinge:TAU:K, lead:TAU, leadhinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, "
     "products A*B and powers A^2";
 constexpr double kMaxTimeConstant = 1e6;  // s; eleven days is no thermal lag of a gyro
 constexpr double kMaxKnot = 1000;  // °C of ΔT: beyond any chamber
 constexpr int kMaxPower = 4;
+constexpr double kMinRateScale = 0.001, kMaxRateScale = 100;  // °C/min: R0 of dir
 
 [[noreturn]] void bad_term(const std::string& text, const std::string& why) {
   throw UsageError(fmt::format("feature term '{}': {} (known: {})", text, why, kKnownTerms));
@@ -154,9 +155,21 @@ FeatureAtom parse_atom(const std::string& term, std::string_view text) {
     return {Kind::lead, parse_time_constant(term, parts[1])};
   }
   if (head == "dir") {
-    if (parts.size() != 2 && parts.size() != 3) bad_term(term, "dir takes one or two time constants: dir:TAU[:LAG]");
-    return {Kind::direction, parse_time_constant(term, parts[1]),
-            parts.size() == 3 ? parse_time_constant(term, parts[2]) : 0.0};
+    if (parts.size() < 2 || parts.size() > 4) {
+      bad_term(term, "dir takes a time constant, the lag of its rate and a rate scale: dir:TAU[:LAG[:R0]]");
+    }
+    FeatureAtom atom{Kind::direction, parse_time_constant(term, parts[1])};
+    if (parts.size() == 2) return atom;
+    atom.tau2 = parts.size() == 4 ? parse_optional_time_constant(term, parts[2]) : parse_time_constant(term, parts[2]);
+    if (parts.size() == 4) {
+      const auto scale = finite_number(parts[3]);
+      if (!scale || !(*scale >= kMinRateScale && *scale <= kMaxRateScale)) {
+        bad_term(term, fmt::format("rate scale '{}' must be a rate in [{:g}, {:g}] °C/min", parts[3], kMinRateScale,
+                                   kMaxRateScale));
+      }
+      atom.rate_scale = *scale;
+    }
+    return atom;
   }
   bad_term(term, fmt::format("unknown atom '{}'", text));
 }
@@ -175,7 +188,9 @@ std::string FeatureAtom::name() const {
     case Kind::lag: return fmt::format("lag:{}", tau);
     case Kind::lag_rate: return fmt::format("lagrate:{}", tau);
     case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", tau, tau2);
-    case Kind::direction: return tau2 > 0 ? fmt::format("dir:{}:{}", tau, tau2) : fmt::format("dir:{}", tau);
+    case Kind::direction:
+      if (rate_scale > 0) return fmt::format("dir:{}:{}:{}", tau, tau2, rate_scale);
+      return tau2 > 0 ? fmt::format("dir:{}:{}", tau, tau2) : fmt::format("dir:{}", tau);
     case Kind::input: return fmt::format("x{}", input_index + 1);
     case Kind::channel_gradient: return fmt::format("grad:{}-{}", channel + 1, channel2 + 1);
     case Kind::channel_gradient_rate: return fmt::format("gradrate:{}-{}", channel + 1, channel2 + 1);
@@ -316,8 +331,8 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
         state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau2);
         source = (delta_t - state.first) / atom.tau2 * 60.0;
       }
-      state.second = lag(state.second_step, state.second_decay, state.second, tanh_by_exp(source / kDirectionRateScale),
-                         step_seconds, atom.tau);
+      state.second = lag(state.second_step, state.second_decay, state.second,
+                         tanh_by_exp(source / atom.direction_rate_scale()), step_seconds, atom.tau);
       return state.second;
     }
     case Kind::channel_gradient:

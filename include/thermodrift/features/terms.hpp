@@ -10,8 +10,9 @@
 //                    the sensor, ΔT - L, is TAU times this)
 //   gradrate:TAU:TG  the rate of G, a lag (TG) of lagrate:TAU: (lagrate - G)/TG, °C/min²
 //                    (the Shupe term: the radial gradient follows the coil rate with a lag)
-//   dir:TAU[:LAG]    a lag (TAU) of tanh(r / 0.2 °C/min), r the smoothed rate, or
-//                    lagrate:LAG when given: a heating (+1) / cooling (-1) memory, unitless
+//   dir:TAU[:LAG[:R0]]  a lag (TAU) of tanh(r / R0), r the smoothed rate (LAG absent or 0) or
+//                    lagrate:LAG, R0 in °C/min (default 0.2): a heating (+1) / cooling (-1)
+//                    memory, unitless; rates well above R0 saturate it
 //   grad:A-B         T_A - T_B, the difference of two smoothed temperature channels, °C
 //                    (A, B: 1-based channel numbers in the log's --temp order; a gradient
 //                    across the unit, say housing minus chamber or coil minus mount)
@@ -50,7 +51,8 @@
 
 namespace thermodrift {
 
-// r0 of dir: rates well above it (ramps) saturate the indicator, soaks bring it to 0.
+// r0 of dir when the term does not give one: rates well above it (ramps) saturate the
+// indicator, soaks bring it to 0.
 inline constexpr double kDirectionRateScale = 0.2;  // °C/min
 
 // Channels a grad term can name: enough for every sensor of a multi-gyro unit.
@@ -67,6 +69,9 @@ struct FeatureAtom {
   std::size_t channel2 = 0;
   double level = 0;             // °C of ΔT: the knot of hinge:TAU:K; the half-width W of play:TAU:W
   double zero = 0;              // s: TL of nodehinge (0: none)
+  double rate_scale = 0;        // °C/min: R0 of dir (0: kDirectionRateScale)
+
+  double direction_rate_scale() const { return rate_scale > 0 ? rate_scale : kDirectionRateScale; }
 
   bool reads_channels() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
 

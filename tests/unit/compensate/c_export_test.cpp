@@ -284,7 +284,7 @@ TEST_F(CExport, SvrFloatMatchesCompensator) { expect_matches(*svr_, *log_, true,
 // equilibrium and step exactly as the C++ ones do.
 TEST_F(CExport, ThermalLagTermsMatchCompensatorThroughAGap) {
   const std::vector<std::string> terms = {"dT",          "lag:420", "lag:420^2",   "lagrate:420",
-                                          "gradrate:420:240", "dir:900", "dir:900:420", "dT*rate",
+                                          "gradrate:420:240", "dir:900", "dir:900:420", "dir:900:0:0.07", "dir:600:420:0.5", "dT*rate",
                                           "hinge:420:-15.5", "hinge:420:12", "hinge:420:12^2*rate",
                                           "lead:300", "leadhinge:300:-5", "leadhinge:300:20*dT"};
   const DriftModel linear = fitted_model(*log_, "linear", terms);

@@ -22,7 +22,7 @@ std::vector<FeatureTerm> parse_all(const std::vector<std::string>& names) {
 
 TEST(FeatureTerms, NamesRoundTrip) {
   for (const std::string name : {"dT", "rate", "lag:600", "lagrate:420", "gradrate:420:240", "dir:900",
-                                 "dir:900:420", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3", "grad:1-4",
+                                 "dir:900:420", "dir:900:420:0.07", "dir:900:0:0.5", "dT^2", "dT*rate", "lag:600^2*rate", "lag:12.5", "x3", "grad:1-4",
                                  "gradrate:12-3", "grad:2-1*lag:600", "hinge:600:-12.5", "hinge:600:0", "hinge:60:3*rate", "lead:900",
                                  "leadhinge:900:-3.5", "lag2:600:120", "lag2rate:600:120", "nodehinge:600:120:0:-3.5",
                                  "nodehinge:600:0:1800:12", "nodehinge:600:120:900:0*rate", "play:600:1.5",
@@ -40,7 +40,8 @@ TEST(FeatureTerms, NamesRoundTrip) {
 
 TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
   for (const std::string bad : {"", "lag", "lag:", "lag:0", "lag:-5", "lag:abc", "lag:1e7", "lag:nan", "lag:300:2",
-                                "gradrate:400", "dir", "dir:1:2:3", "dT^5", "dT^0", "dT^2^2", "dT^", "foo", "dT*",
+                                "gradrate:400", "dir", "dir:1:2:3:4", "dir:1:2:0", "dir:1:2:nan",
+                                "dir:1:2:1e9", "dir:1:-2:0.2", "dir:1:x:0.2", "dT^5", "dT^0", "dT^2^2", "dT^", "foo", "dT*",
                                 "x0", "x3^2", "x3*dT", "rate:60", "grad", "grad:1", "grad:1-1", "grad:0-2", "grad:1-65",
                                 "grad:a-b", "grad:1-2-3", "gradrate:1-", "grad:1-2:3", "grad:-1-2", "grad:001-2",
                                 "hinge", "hinge:600", "hinge:0:5", "hinge:600:x", "hinge:600:nan", "hinge:600:1e9",
@@ -81,12 +82,14 @@ TEST(FeatureTerms, LagIsExactForAStepWhateverTheSampling) {
 
 // On a ramp r the discrete lag settles r·h·a/(1 - a) behind the input (a = exp(-h/TAU)),
 // which is TAU·r to first order in h/TAU; lagrate then reads the ramp's rate, the
-// gradient's rate settles to 0, and the direction memory to tanh(rate / 0.2 °C/min).
+// gradient's rate settles to 0, and the direction memory to tanh(rate / R0), R0 = 0.2 °C/min
+// unless the term gives its own.
 TEST(FeatureTerms, RampSettlesToItsClosedForm) {
   const double tau = 400, h = 5, r = 0.5 / 60;  // °C/s: 0.5 °C/min
   const double a = std::exp(-h / tau);
   const double behind = r * h * a / (1 - a);
-  const auto terms = parse_all({"lag:400", "lagrate:400", "gradrate:400:200", "dir:300", "dir:300:400"});
+  const auto terms =
+      parse_all({"lag:400", "lagrate:400", "gradrate:400:200", "dir:300", "dir:300:400", "dir:300:0:0.5", "dir:300:400:1.5"});
   TermEvaluator evaluator(terms);
   std::vector<double> values(terms.size());
   for (int k = 0; k <= 20000; ++k) {  // 250 TAU
@@ -100,6 +103,9 @@ TEST(FeatureTerms, RampSettlesToItsClosedForm) {
   EXPECT_NEAR(values[2], 0, 1e-9);
   EXPECT_NEAR(values[3], std::tanh(r * 60 / kDirectionRateScale), 1e-12);
   EXPECT_NEAR(values[4], std::tanh(values[1] / kDirectionRateScale), 1e-9);
+  EXPECT_NEAR(values[5], std::tanh(r * 60 / 0.5), 1e-12);
+  EXPECT_NEAR(values[6], std::tanh(values[1] / 1.5), 1e-9);
+  EXPECT_GT(values[3] - values[5], 0.1);  // the scale is used, not the default
 }
 
 // A step of 0 is a (re)start: every state goes to equilibrium with the current input, so a
