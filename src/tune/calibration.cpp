@@ -301,11 +301,12 @@ std::size_t minimum_samples(const std::string& model, std::size_t terms) {
 
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
-                      bool standardize, std::size_t axis) {
+                      bool standardize, std::size_t axis, const LinearModel* linear_fit) {
   FittedModel fitted;
   fitted.fit = {{"terms", terms}};
+  if (linear_fit && options.model != "stepwise") fitted.fit["averaged_linear_part"] = true;
   if (options.model == "linear") {
-    fitted.model = fit_least_squares(features, target, linear_regressors(terms.size()));
+    fitted.model = linear_fit ? *linear_fit : fit_least_squares(features, target, linear_regressors(terms.size()));
   } else if (options.model == "stepwise") {
     auto stepwise = fit_stepwise(features, target,
                                  options.partially_linear ? linear_regressors(terms.size())
@@ -321,7 +322,9 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     SvrModel svr;
     Eigen::VectorXd kernel_target = target;
     if (options.partially_linear) {
-      svr.linear_part = fit_least_squares(features, target, linear_regressors(static_cast<std::size_t>(features.cols())));
+      svr.linear_part = linear_fit ? *linear_fit
+                                   : fit_least_squares(features, target,
+                                                       linear_regressors(static_cast<std::size_t>(features.cols())));
       kernel_target -= svr.linear_part->predict(features);
       fitted.fit["partially_linear"] = true;
     }
@@ -490,6 +493,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     axis_model.pipeline = make_pipeline(logs, axis, options);
     axis_model.kind = options.model;
     nlohmann::json selection_json;
+    std::optional<LinearModel> linear_fit;
     if (chooses_features(options)) {
       const FeatureSelectionOptions& selection_options = options.selection;
       FeatureSelection selection = axis < searched.size() ? searched[axis] : search_features(logs, axis, axis_model.pipeline, options);
@@ -509,6 +513,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
       for (const auto& term : selection.terms) axis_model.pipeline.terms.push_back(FeatureTerm::parse(term));
       axis_model.pipeline.validate();
       selection_json = selection.to_json(selection_options);
+      linear_fit = std::move(selection.linear_fit);
     }
     const auto& pipeline = axis_model.pipeline;
 
@@ -524,7 +529,8 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
       if (held_out.by == FoldsBy::runs) axis_options.tuning->blocks = held_out.blocks;
     }
     FittedModel fitted =
-        fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis);
+        fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis,
+                  linear_fit ? &*linear_fit : nullptr);
     axis_model.model = std::move(fitted.model);
     nlohmann::json fit = std::move(fitted.fit);
     if (!selection_json.is_null()) fit["feature_selection"] = std::move(selection_json);

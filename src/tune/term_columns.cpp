@@ -2,6 +2,8 @@
 
 #include <Eigen/Cholesky>
 
+#include <limits>
+
 #include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
@@ -14,7 +16,8 @@ namespace thermodrift {
 // settles nearly collinear columns (a hinge whose knot no sample passes is the node's
 // level minus a constant); it moves the fits of well-determined columns by far less than
 // the noise does.
-double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) {
+Eigen::VectorXd least_squares_cv_predictions(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                                             const std::vector<SampleRange>& blocks) {
   const Eigen::Index n = y.size();
   Eigen::MatrixXd design(n, x.cols() + 1);
   design.col(0).setOnes();
@@ -26,8 +29,7 @@ double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, cons
   gram.selfadjointView<Eigen::Lower>().rankUpdate(design.transpose());
   gram = gram.selfadjointView<Eigen::Lower>();
   const Eigen::VectorXd moment = design.transpose() * y;
-  double squared_error = 0;
-  double held_out = 0;
+  Eigen::VectorXd predicted = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::quiet_NaN());
   for (const SampleRange& block : blocks) {
     const auto rows = design.middleRows(block.begin, block.size());
     const auto target = y.segment(block.begin, block.size());
@@ -35,10 +37,23 @@ double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, cons
     const Eigen::VectorXd rhs = moment - rows.transpose() * target;
     train.diagonal() += 1e-9 * train.diagonal().cwiseAbs() + Eigen::VectorXd::Constant(train.rows(), 1e-300);
     const Eigen::VectorXd beta = train.ldlt().solve(rhs);
-    squared_error += (target - rows * beta).squaredNorm();
+    predicted.segment(block.begin, block.size()) = rows * beta;
+  }
+  return predicted;
+}
+
+double held_out_mse(const Eigen::VectorXd& predicted, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) {
+  double squared_error = 0;
+  double held_out = 0;
+  for (const SampleRange& block : blocks) {
+    squared_error += (y.segment(block.begin, block.size()) - predicted.segment(block.begin, block.size())).squaredNorm();
     held_out += static_cast<double>(block.size());
   }
   return squared_error / held_out;
+}
+
+double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) {
+  return held_out_mse(least_squares_cv_predictions(x, y, blocks), y, blocks);
 }
 
 }  // namespace thermodrift

@@ -73,5 +73,10 @@ class ColumnCache {
 // Pooled MSE of least squares (with an intercept) over held-out `blocks` (contiguous
 // blocks in time, or runs): each block is predicted by the fit on the rest.
 double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks);
+// The held-out predictions behind it: each block's rows by the fit on the rest (NaN on
+// rows no block holds out), and their pooled MSE.
+Eigen::VectorXd least_squares_cv_predictions(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                                             const std::vector<SampleRange>& blocks);
+double held_out_mse(const Eigen::VectorXd& predicted, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks);
 
 }  // namespace thermodrift

@@ -13,16 +13,21 @@ namespace thermodrift {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// The memory rate scales of the searches whose fits are averaged (°C/min; 0: the default,
+// kDirectionRateScale = 0.2): about a factor 3 either side of it.
+constexpr double kMemoryRateScales[] = {0, 0.07, 0.5};
 
 // A term linear in the node's dynamics, added to the node's static map when it pays.
 struct DynamicTerm {
   enum class Kind { gradient_rate, memory, second_lag, play } kind;
   double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W
+  double rate_scale = 0;  // R0 of a memory, °C/min (0: the default, kDirectionRateScale); not refined
 
   std::string name(double node_tau) const {
     switch (kind) {
       case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", node_tau, tau);
-      case Kind::memory: return fmt::format("dir:{}:{}", tau, node_tau);
+      case Kind::memory:
+        return rate_scale > 0 ? fmt::format("dir:{}:{}:{}", tau, node_tau, rate_scale) : fmt::format("dir:{}:{}", tau, node_tau);
       case Kind::second_lag: return fmt::format("lag:{}", tau);
       case Kind::play: return fmt::format("play:{}:{}", node_tau, tau);
     }
@@ -196,6 +201,8 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   // or on another thermal path than the sensor's (the sensor on another axis' block lags the
   // common source by TL, the coil by T1). Each must beat the single lag by min_gain: two
   // grids, the series pair with T2 <= T1 (the order of two lags does not matter).
+  NodeModel runner_up;  // the node structure not chosen (plain or structured), for the average
+  double runner_up_cv = kInfinity;
   {
     NodeModel structured = best;
     double structured_cv = kInfinity;
@@ -211,7 +218,9 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
         }
       }
     }
+    runner_up = structured, runner_up_cv = structured_cv;
     if (structured_cv < (1.0 - options.min_gain) * best_cv) {
+      runner_up = best, runner_up_cv = best_cv;
       best = std::move(structured), best_cv = structured_cv;
       result.path.push_back({"node", best.tau2 > 0 ? fmt::format("lags {} s and {} s in series", best.tau, best.tau2)
                                                    : fmt::format("lag {} s, lead {} s", best.tau, best.zero),
@@ -336,67 +345,144 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     if (!moves.empty()) result.path.push_back({"tune", moves, model_cv, model.terms()});
   };
   refine(best, best_cv);
-
-  // Dynamic terms, forward: each must cut the CV MSE by more than min_gain.
-  std::vector<DynamicTerm> candidates;
-  for (const double tau : grid) {
-    for (const auto kind : {DynamicTerm::Kind::gradient_rate, DynamicTerm::Kind::second_lag}) {
-      const DynamicTerm candidate{kind, tau};
-      if (tau <= candidate.longest()) candidates.push_back(candidate);
-    }
-  }
-  for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) candidates.push_back({DynamicTerm::Kind::memory, tau});
-  for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
-  const double keep = 1.0 - options.min_gain;
-  while (best.dynamics.size() < options.max_dynamic_terms) {
-    std::vector<std::pair<double, NodeModel>> ranked;
-    auto offer = [&](const std::vector<DynamicTerm>& terms) {
-      NodeModel trial = best;
-      for (const auto& term : terms) {
-        if (std::find(trial.dynamics.begin(), trial.dynamics.end(), term) != trial.dynamics.end()) return;
-        trial.dynamics.push_back(term);
-      }
-      if (trial.dynamics.size() > options.max_dynamic_terms || !distinct(trial)) return;
-      ranked.emplace_back(score(trial), std::move(trial));
-    };
-    for (const auto& candidate : candidates) {
-      offer({candidate});
-    }
-    // A Shupe term and a memory (or a play) together: each alone is often beaten by a proxy that
-    // then blocks the pair (the greedy search's lesson, docs/features.md).
-    for (const double tg : {60.0, 120.0, 240.0, 480.0}) {
-      for (const double td : {300.0, 600.0, 1200.0}) {
-        offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td}});
-      }
-      for (const double width : {0.5, 1.0, 2.0, 4.0}) {
-        offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::play, width}});
-      }
-    }
-    if (ranked.empty()) break;
-    std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    // The best few are refined before one is chosen: a term often pays only once the
-    // constants it shares have moved.
-    NodeModel chosen;
-    double chosen_cv = kInfinity;
-    const std::size_t silent = result.path.size();
-    for (std::size_t i = 0; i < std::min<std::size_t>(ranked.size(), options.refine_top); ++i) {
-      auto& [cv, trial] = ranked[i];
-      refine(trial, cv);
-      if (cv < chosen_cv) chosen_cv = cv, chosen = trial;
-    }
-    result.path.resize(silent);  // the trials' moves; the chosen one's are in its "add" step
-    const std::size_t added = chosen.dynamics.size() - best.dynamics.size();
-    if (!(chosen_cv < std::pow(keep, static_cast<double>(added)) * best_cv)) break;
-    std::string names;
-    for (std::size_t i = best.dynamics.size(); i < chosen.dynamics.size(); ++i) {
-      names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.dynamics_tau());
-    }
-    best = std::move(chosen), best_cv = chosen_cv;
-    result.path.push_back({"add", names, best_cv, best.terms()});
+  if (std::isfinite(runner_up_cv)) {
+    result.path.push_back({"node", "the structure not chosen, for the average below", runner_up_cv, runner_up.terms()});
+    refine(runner_up, runner_up_cv);
   }
 
-  result.terms = best.terms();
-  result.cv_mse = best_cv;
+  // Dynamic terms, forward from a node: each must cut the CV MSE by more than min_gain.
+  // Memories are offered with the rate scale `memory_scale` (0: the default).
+  auto grow = [&](NodeModel best, double best_cv, double memory_scale) -> std::pair<NodeModel, double> {
+    std::vector<DynamicTerm> candidates;
+    for (const double tau : grid) {
+      for (const auto kind : {DynamicTerm::Kind::gradient_rate, DynamicTerm::Kind::second_lag}) {
+        const DynamicTerm candidate{kind, tau};
+        if (tau <= candidate.longest()) candidates.push_back(candidate);
+      }
+    }
+    for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) {
+      candidates.push_back({DynamicTerm::Kind::memory, tau, memory_scale});
+    }
+    for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
+    const double keep = 1.0 - options.min_gain;
+    while (best.dynamics.size() < options.max_dynamic_terms) {
+      std::vector<std::pair<double, NodeModel>> ranked;
+      auto offer = [&](const std::vector<DynamicTerm>& terms) {
+        NodeModel trial = best;
+        for (const auto& term : terms) {
+          if (std::find(trial.dynamics.begin(), trial.dynamics.end(), term) != trial.dynamics.end()) return;
+          trial.dynamics.push_back(term);
+        }
+        if (trial.dynamics.size() > options.max_dynamic_terms || !distinct(trial)) return;
+        ranked.emplace_back(score(trial), std::move(trial));
+      };
+      for (const auto& candidate : candidates) {
+        offer({candidate});
+      }
+      // A Shupe term and a memory (or a play) together: each alone is often beaten by a proxy that
+      // then blocks the pair (the greedy search's lesson, docs/features.md).
+      for (const double tg : {60.0, 120.0, 240.0, 480.0}) {
+        for (const double td : {300.0, 600.0, 1200.0}) {
+          offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td, memory_scale}});
+        }
+        for (const double width : {0.5, 1.0, 2.0, 4.0}) {
+          offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::play, width}});
+        }
+      }
+      if (ranked.empty()) break;
+      std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      // The best few are refined before one is chosen: a term often pays only once the
+      // constants it shares have moved.
+      NodeModel chosen;
+      double chosen_cv = kInfinity;
+      const std::size_t silent = result.path.size();
+      for (std::size_t i = 0; i < std::min<std::size_t>(ranked.size(), options.refine_top); ++i) {
+        auto& [cv, trial] = ranked[i];
+        refine(trial, cv);
+        if (cv < chosen_cv) chosen_cv = cv, chosen = trial;
+      }
+      result.path.resize(silent);  // the trials' moves; the chosen one's are in its "add" step
+      const std::size_t added = chosen.dynamics.size() - best.dynamics.size();
+      if (!(chosen_cv < std::pow(keep, static_cast<double>(added)) * best_cv)) break;
+      std::string names;
+      for (std::size_t i = best.dynamics.size(); i < chosen.dynamics.size(); ++i) {
+        names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.dynamics_tau());
+      }
+      best = std::move(chosen), best_cv = chosen_cv;
+      result.path.push_back({"add", names, best_cv, best.terms()});
+    }
+    return {std::move(best), best_cv};
+  };
+
+  // One cycle rarely tells a memory from a play, one memory's rate scale from another's, or
+  // a lead-lag node from two lags in series: searches that differ only in that find sets
+  // whose CV MSE is close and whose held-out errors are not (on development laws 1-20, each
+  // was 5-50x better than another on some axes and as much worse on others). So six
+  // searches are run, from the chosen node and from the structure not chosen, each with
+  // memories of one rate scale, and the least-squares fits of those the CV cannot tell
+  // from the best are averaged. The MSE of an average is at most the average of the
+  // members' MSEs, so it is never worse than picking one of them at random, which is what
+  // choosing by a CV that cannot tell them apart amounts to.
+  struct Member {
+    NodeModel model;
+    double cv = kInfinity;
+  };
+  std::vector<Member> members;
+  for (const bool runner : {false, true}) {
+    if (runner && !std::isfinite(runner_up_cv)) break;
+    for (const double scale : kMemoryRateScales) {
+      auto [model, cv] = grow(runner ? runner_up : best, runner ? runner_up_cv : best_cv, scale);
+      result.path.push_back({"member", fmt::format("{}: {}, memories with a rate scale of {} °C/min", members.size() + 1,
+                                                   runner ? "the node structure not chosen" : "the node",
+                                                   scale > 0 ? scale : kDirectionRateScale),
+                             cv, model.terms()});
+      members.push_back({std::move(model), cv});
+    }
+  }
+  // Only the members the CV cannot tell from the best (within min_gain of its CV MSE).
+  double lowest = kInfinity;
+  for (const auto& member : members) lowest = std::min(lowest, member.cv);
+  std::string kept;
+  for (std::size_t m = 0; m < members.size(); ++m) {
+    if (!(members[m].cv * (1.0 - options.min_gain) > lowest)) kept += fmt::format("{}{}", kept.empty() ? "" : ", ", m + 1);
+  }
+  std::erase_if(members, [&](const Member& member) { return member.cv * (1.0 - options.min_gain) > lowest; });
+  std::vector<std::string> names;
+  std::size_t distinct_members = 0;
+  for (std::size_t m = 0; m < members.size(); ++m) {
+    const auto terms = members[m].model.terms();
+    bool repeated = false;
+    for (std::size_t earlier = 0; earlier < m; ++earlier) repeated = repeated || members[earlier].model.terms() == terms;
+    if (!repeated) ++distinct_members;
+    for (const auto& name : terms) {
+      if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    }
+  }
+  result.terms = names;
+  if (distinct_members == 1) {
+    result.cv_mse = members.front().cv;
+    return result;
+  }
+  LinearModel average;
+  average.regressors = linear_regressors(names.size());
+  average.coefficients = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(names.size()));
+  Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());
+  const double weight = 1.0 / static_cast<double>(members.size());
+  for (const auto& member : members) {
+    const auto terms = member.model.terms();
+    const Eigen::MatrixXd x = cache.matrix(terms);
+    const LinearModel fit = fit_least_squares(x, y, linear_regressors(terms.size()));
+    for (std::size_t j = 0; j < terms.size(); ++j) {
+      const auto column = std::find(names.begin(), names.end(), terms[j]) - names.begin();
+      average.coefficients[column] += weight * fit.coefficients[static_cast<Eigen::Index>(j)];
+    }
+    average.intercept += weight * fit.intercept;
+    held_out += weight * least_squares_cv_predictions(x, y, result.held_out.blocks);
+  }
+  result.cv_mse = held_out_mse(held_out, y, result.held_out.blocks);
+  result.linear_fit = std::move(average);
+  result.path.push_back({"average", fmt::format("members {} ({} distinct sets), their fits averaged", kept, distinct_members),
+                         result.cv_mse, names});
   return result;
 }
 

@@ -149,10 +149,12 @@ struct FittedModel {
   nlohmann::json fit;
   double tuning_seconds = 0;
 };
-// `axis` labels tuning progress.
+// `axis` labels tuning progress. `linear_fit`, when given (an identification's averaged
+// fits, FeatureSelection::linear_fit), is the linear model, or the partially linear SVR's
+// linear part, instead of a least-squares fit; stepwise ignores it.
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
-                      bool standardize, std::size_t axis = 0);
+                      bool standardize, std::size_t axis = 0, const LinearModel* linear_fit = nullptr);
 std::size_t minimum_samples(const std::string& model, std::size_t terms);
 
 // libsvm-format data is used exactly as given: no smoothing, no pipeline, no scaling, so

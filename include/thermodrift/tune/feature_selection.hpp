@@ -17,6 +17,7 @@
 
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/models/linear.hpp"
 #include "thermodrift/stop_token.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
@@ -68,7 +69,9 @@ struct SvrJudgeOptions {
 };
 
 struct SelectionStep {
-  std::string action;  // "add", "drop", "tune" (time constants moved) or "svr" (a set judged by the SVR)
+  // "add", "drop", "tune" (time constants moved), "svr" (a set judged by the SVR); thermal_node
+  // also "node", "member" (one search's final set) and "average" (the members averaged)
+  std::string action;
   std::string term;    // the term(s) added or dropped, "TAU -> TAU'" moves, or the set judged
   double cv_mse = 0;   // (°/h)², after the step (least squares; the SVR's for "svr")
   std::vector<std::string> terms;  // the set after the step
@@ -82,6 +85,10 @@ struct FeatureSelection {
   std::vector<SelectionStep> path;
   std::size_t candidates_scored = 0;
   HeldOutBlocks held_out;  // the least-squares CV's blocks (their count and kind go to the JSON)
+  // thermal_node: when several searches were averaged, their least-squares fits averaged
+  // over `terms` (the union of their sets): the linear model, or the SVR's linear part,
+  // instead of a least-squares refit on the union.
+  std::optional<LinearModel> linear_fit;
 
   nlohmann::json to_json(const FeatureSelectionOptions& options) const;
 };

@@ -10,6 +10,8 @@
 #include <variant>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/sim/law_family.hpp"
 #include "thermodrift/tune/calibration.hpp"
@@ -76,6 +78,48 @@ bool has_atom(const Pipeline& pipeline, FeatureAtom::Kind kind, double* level = 
   return false;
 }
 
+// Where the identification averaged several searches (fit.feature_selection's "average"
+// step), the model is the mean of the kept members' least-squares fits, each on its own
+// terms of the training log, and the blocked CV of that mean is at most the mean of theirs.
+// Returns whether the axis was averaged.
+bool check_average(const AxisModel& axis, const ChamberLog& training, std::size_t a) {
+  const auto& path = axis.fit.at("feature_selection").at("path");
+  std::vector<std::vector<std::string>> member_terms;
+  std::vector<double> member_cv;
+  std::string kept;
+  for (const auto& step : path) {
+    if (step.at("action") == "member") {
+      member_terms.push_back(step.at("terms").get<std::vector<std::string>>());
+      member_cv.push_back(step.at("cv_mse").get<double>());
+    }
+    if (step.at("action") == "average") kept = step.at("term").get<std::string>();
+  }
+  EXPECT_GE(member_terms.size(), 3u) << "one search per memory rate scale at least";
+  if (kept.empty()) return false;
+  const FeatureTable union_table = feature_table({training}, axis.pipeline, a, true);
+  const Eigen::VectorXd averaged = axis.predict(union_table.features);
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(averaged.size());
+  double mean_cv = 0;
+  int count = 0;
+  for (std::size_t m = 0; m < member_terms.size(); ++m) {
+    // "members 1, 3, 4 (2 distinct sets), ...": the numbers before the parenthesis
+    const std::string numbers = ", " + kept.substr(8, kept.find(" (") - 8) + ",";
+    if (numbers.find(fmt::format(" {},", m + 1)) == std::string::npos) continue;
+    Pipeline pipeline = axis.pipeline;
+    pipeline.terms.clear();
+    for (const auto& name : member_terms[m]) pipeline.terms.push_back(FeatureTerm::parse(name));
+    const FeatureTable table = feature_table({training}, pipeline, a, true);
+    mean += fit_least_squares(table.features, table.target, linear_regressors(pipeline.terms.size())).predict(table.features);
+    mean_cv += member_cv[m];
+    ++count;
+  }
+  EXPECT_GE(count, 2);
+  mean /= count;
+  EXPECT_LT((averaged - mean).cwiseAbs().maxCoeff(), 1e-6 * averaged.cwiseAbs().maxCoeff());
+  EXPECT_LE(axis.fit.at("feature_selection").at("cv_mse").get<double>(), mean_cv / count * (1 + 1e-12));
+  return true;
+}
+
 TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
   const sim::UnitLaw unit = known_unit();
   const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 2), 4);
@@ -95,7 +139,9 @@ TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
   const auto floor = run.noise_floor(100, split);
 
   const double true_delay[3] = {600, 1200, 500};
+  int averaged = 0;
   for (std::size_t a = 0; a < 3; ++a) {
+    averaged += check_average(calibration.model.axes[a], first_cycle, a);
     const Pipeline& pipeline = calibration.model.axes[a].pipeline;
     std::string names;
     for (const auto& name : pipeline.term_names()) names += name + " ";
@@ -105,6 +151,7 @@ TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
     EXPECT_NEAR(node_delay(pipeline), true_delay[a], 0.25 * true_delay[a]);
     EXPECT_LT(held_out[a].mse_after / floor[a], 3.0) << "held-out MSE over the noise floor, next cycle";
   }
+  EXPECT_GE(averaged, 1) << "no axis averaged: the check above checked nothing";
   EXPECT_TRUE(has_atom(calibration.model.axes[0].pipeline, FeatureAtom::Kind::direction));
   double width = 0;
   ASSERT_TRUE(has_atom(calibration.model.axes[2].pipeline, FeatureAtom::Kind::play, &width));
