@@ -217,6 +217,38 @@ inline std::string summary_table(const std::vector<LawResult>& laws, const std::
     }
   }
 
+  // One figure per method and test group over every law and axis, to compare two runs by:
+  // the geometric mean of the ratios (the mean of their logs: a law 100x worse counts as
+  // much as one 100x better) and how many exceed 10 and 100.
+  out += "\nall axes together: geometric mean of the ratios; ratios above 10 and above 100 (of n)\n";
+  for (Method method : methods) {
+    std::string line = fmt::format("{:<9}", to_string(method));
+    for (const std::string group : {"next cycle", "other profiles"}) {
+      double log_sum = 0;
+      std::size_t n = 0, above_10 = 0, above_100 = 0;
+      for (const auto& law : laws) {
+        for (const auto& result : law.methods) {
+          if (result.method != method || !result.error.empty()) continue;
+          for (std::size_t t = 0; t < law.tests.size(); ++t) {
+            if (!in_group(group, law.tests[t])) continue;
+            for (std::size_t a = 0; a < 3; ++a) {
+              const double ratio = result.ratio(t, a);
+              if (!(ratio > 0) || !std::isfinite(ratio)) continue;
+              log_sum += std::log(ratio);
+              ++n;
+              above_10 += ratio > 10;
+              above_100 += ratio > 100;
+            }
+          }
+        }
+      }
+      line += n == 0 ? fmt::format(" | {}: none", group)
+                     : fmt::format(" | {}: {:.2f}, > 10: {}, > 100: {} (of {})", group,
+                                   std::exp(log_sum / static_cast<double>(n)), above_10, above_100, n);
+    }
+    out += line + "\n";
+  }
+
   out += "\nin-sample MSE / floor of the training cycle (in-sample: optimistic), median per axis; fit time per law\n";
   out += "(fit = calibrate; for linear, stepwise and svr plus the whole shared least-squares search, counted once in each;\n"
          " cpu = CPU seconds of the law's thread, tuning on one thread; wall on a shared machine)\n";
