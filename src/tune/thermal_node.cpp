@@ -426,54 +426,55 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   struct Member {
     NodeModel model;
     double cv = kInfinity;
+    std::vector<std::string> terms;
   };
   std::vector<Member> members;
   for (const bool runner : {false, true}) {
     if (runner && !std::isfinite(runner_up_cv)) break;
     for (const double scale : kMemoryRateScales) {
       auto [model, cv] = grow(runner ? runner_up : best, runner ? runner_up_cv : best_cv, scale);
+      std::vector<std::string> terms = model.terms();
       result.path.push_back({"member", fmt::format("{}: {}, memories with a rate scale of {} °C/min", members.size() + 1,
                                                    runner ? "the node structure not chosen" : "the node",
                                                    scale > 0 ? scale : kDirectionRateScale),
-                             cv, model.terms()});
-      members.push_back({std::move(model), cv});
+                             cv, terms});
+      members.push_back({std::move(model), cv, std::move(terms)});
     }
   }
   // Only the members the CV cannot tell from the best (within min_gain of its CV MSE).
   double lowest = kInfinity;
   for (const auto& member : members) lowest = std::min(lowest, member.cv);
-  std::string kept;
+  std::vector<Member> kept;
+  std::string kept_numbers;
   for (std::size_t m = 0; m < members.size(); ++m) {
-    if (!(members[m].cv * (1.0 - options.min_gain) > lowest)) kept += fmt::format("{}{}", kept.empty() ? "" : ", ", m + 1);
+    if (members[m].cv * (1.0 - options.min_gain) > lowest) continue;
+    kept_numbers += fmt::format("{}{}", kept_numbers.empty() ? "" : ", ", m + 1);
+    kept.push_back(std::move(members[m]));
   }
-  std::erase_if(members, [&](const Member& member) { return member.cv * (1.0 - options.min_gain) > lowest; });
   std::vector<std::string> names;
   std::size_t distinct_members = 0;
-  for (std::size_t m = 0; m < members.size(); ++m) {
-    const auto terms = members[m].model.terms();
-    bool repeated = false;
-    for (std::size_t earlier = 0; earlier < m; ++earlier) repeated = repeated || members[earlier].model.terms() == terms;
-    if (!repeated) ++distinct_members;
-    for (const auto& name : terms) {
+  for (std::size_t m = 0; m < kept.size(); ++m) {
+    const auto repeats = [&](const Member& earlier) { return earlier.terms == kept[m].terms; };
+    if (std::none_of(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(m), repeats)) ++distinct_members;
+    for (const auto& name : kept[m].terms) {
       if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
     }
   }
   result.terms = names;
   if (distinct_members == 1) {
-    result.cv_mse = members.front().cv;
+    result.cv_mse = kept.front().cv;
     return result;
   }
   LinearModel average;
   average.regressors = linear_regressors(names.size());
   average.coefficients = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(names.size()));
   Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());
-  const double weight = 1.0 / static_cast<double>(members.size());
-  for (const auto& member : members) {
-    const auto terms = member.model.terms();
-    const Eigen::MatrixXd x = cache.matrix(terms);
-    const LinearModel fit = fit_least_squares(x, y, linear_regressors(terms.size()));
-    for (std::size_t j = 0; j < terms.size(); ++j) {
-      const auto column = std::find(names.begin(), names.end(), terms[j]) - names.begin();
+  const double weight = 1.0 / static_cast<double>(kept.size());
+  for (const auto& member : kept) {
+    const Eigen::MatrixXd x = cache.matrix(member.terms);
+    const LinearModel fit = fit_least_squares(x, y, linear_regressors(member.terms.size()));
+    for (std::size_t j = 0; j < member.terms.size(); ++j) {
+      const auto column = std::find(names.begin(), names.end(), member.terms[j]) - names.begin();
       average.coefficients[column] += weight * fit.coefficients[static_cast<Eigen::Index>(j)];
     }
     average.intercept += weight * fit.intercept;
@@ -481,7 +482,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   }
   result.cv_mse = held_out_mse(held_out, y, result.held_out.blocks);
   result.linear_fit = std::move(average);
-  result.path.push_back({"average", fmt::format("members {} ({} distinct sets), their fits averaged", kept, distinct_members),
+  result.path.push_back({"average", fmt::format("members {} ({} distinct sets), their fits averaged", kept_numbers, distinct_members),
                          result.cv_mse, names});
   return result;
 }
