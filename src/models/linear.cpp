@@ -221,6 +221,19 @@ double residual_sum_of_squares(const Eigen::MatrixXd& features, const Eigen::Vec
 
 }  // namespace
 
+double cancellation(const Eigen::MatrixXd& features, const Eigen::VectorXd& coefficients, Eigen::Index grouped) {
+  if (features.cols() != coefficients.size() || grouped < 0 || grouped > features.cols()) {
+    throw Error("cancellation: coefficients, columns and group do not match");
+  }
+  if (features.rows() < 2) return 1.0;
+  const auto spread = [](const Eigen::VectorXd& v) { return std::sqrt((v.array() - v.mean()).square().mean()); };
+  const double whole = spread(features * coefficients);
+  if (!(whole > 0)) return 1.0;
+  double parts = grouped > 0 ? spread(features.leftCols(grouped) * coefficients.head(grouped)) : 0.0;
+  for (Eigen::Index j = grouped; j < features.cols(); ++j) parts += spread(features.col(j) * coefficients[j]);
+  return parts / whole;
+}
+
 StepwiseFit fit_stepwise(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                          const std::vector<Regressor>& candidates,
                          const std::vector<std::string>& term_names,

@@ -49,6 +49,15 @@ struct LinearModel {
 LinearModel fit_least_squares(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                               std::vector<Regressor> regressors);
 
+// How much the parts of a linear fit cancel on the rows of `features`: the sum of the
+// spreads (standard deviations) of the parts' contributions over the spread of their sum,
+// Σ_p sd(X_p·β_p) / sd(X·β). The first `grouped` columns are one part (a static map
+// and its hinges, whose contributions cancel by design), every other column a part of its
+// own. About 1 when the parts add up; large when the fit is a small difference of large
+// terms, which any mismatch of one part (a state started elsewhere, another excitation)
+// turns into a large error. 1 for a constant fit.
+double cancellation(const Eigen::MatrixXd& features, const Eigen::VectorXd& coefficients, Eigen::Index grouped);
+
 struct StepwiseOptions {
   double f_to_enter = 4.0;   // partial F a candidate needs to enter (Efroymson's classical value)
   double f_to_remove = 3.9;  // partial F below which an included regressor leaves; < f_to_enter avoids cycling

@@ -279,5 +279,35 @@ TEST(ResidualMetrics, BeforeIsTheVarianceAfterTheMeanSquare) {
   EXPECT_DOUBLE_EQ(metrics.residual_peak_to_peak, 2.0);
 }
 
+// Two independent parts that add up: sd(a) + sd(b) over sd(a + b), √2 for equal spreads.
+// Two parts that are nearly the same column with opposite signs: a small difference of
+// large terms, the spread of each part over the spread of their difference. A group counts
+// as one part, however its columns cancel inside it.
+TEST(Cancellation, IsTheSumOfThePartsSpreadsOverTheWholesSpread) {
+  Random random(11);
+  const Eigen::Index n = 4000;
+  Eigen::MatrixXd x(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    x(i, 0) = random.normal();
+    x(i, 1) = random.normal();
+    x(i, 2) = x(i, 0) + 0.01 * random.normal();
+  }
+  auto spread = [](const Eigen::VectorXd& v) { return std::sqrt((v.array() - v.mean()).square().mean()); };
+  const Eigen::MatrixXd independent = x.leftCols(2);
+  EXPECT_NEAR(cancellation(independent, Eigen::Vector2d(1, 1), 0),
+              (spread(x.col(0)) + spread(x.col(1))) / spread(x.col(0) + x.col(1)), 1e-12);
+  EXPECT_NEAR(cancellation(independent, Eigen::Vector2d(1, 1), 0), std::sqrt(2.0), 0.05);
+  EXPECT_DOUBLE_EQ(cancellation(independent, Eigen::Vector2d(3, 0), 0), 1.0) << "one part alone";
+
+  Eigen::MatrixXd near(n, 2);
+  near << x.col(0), x.col(2);
+  const double expected = (spread(x.col(0)) + spread(x.col(2))) / spread(x.col(2) - x.col(0));
+  EXPECT_NEAR(cancellation(near, Eigen::Vector2d(-1, 1), 0), expected, 1e-9 * expected);
+  EXPECT_GT(cancellation(near, Eigen::Vector2d(-1, 1), 0), 100.0);
+  EXPECT_DOUBLE_EQ(cancellation(near, Eigen::Vector2d(-1, 1), 2), 1.0) << "one group: one part";
+  EXPECT_DOUBLE_EQ(cancellation(near, Eigen::Vector2d(0, 0), 0), 1.0) << "a constant fit";
+  EXPECT_THROW(cancellation(near, Eigen::Vector3d(1, 1, 1), 0), Error);
+}
+
 }  // namespace
 }  // namespace thermodrift
