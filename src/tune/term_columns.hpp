@@ -73,6 +73,14 @@ class ColumnCache {
 // Pooled MSE of least squares (with an intercept) over held-out `blocks` (contiguous
 // blocks in time, or runs): each block is predicted by the fit on the rest.
 double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks);
+// The blocked CV MSE of least squares on x and the cancellation of the fit on all rows
+// (models/linear.hpp: the first `grouped` columns one part), from one Gram matrix.
+struct LeastSquaresScore {
+  double cv_mse = 0;
+  double cancellation = 1;
+};
+LeastSquaresScore least_squares_cv_score(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                                         const std::vector<SampleRange>& blocks, Eigen::Index grouped);
 // The held-out predictions behind it: each block's rows by the fit on the rest (NaN on
 // rows no block holds out), and their pooled MSE.
 Eigen::VectorXd least_squares_cv_predictions(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,

@@ -19,9 +19,12 @@ constexpr double kMemoryRateScales[] = {0, 0.07, 0.5};
 
 // A term linear in the node's dynamics, added to the node's static map when it pays.
 struct DynamicTerm {
-  enum class Kind { gradient_rate, memory, second_lag, play } kind;
+  enum class Kind { gradient_rate, memory, second_lag, play, channel_gradient, channel_gradient_rate } kind;
   double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W
   double rate_scale = 0;  // R0 of a memory, °C/min (0: the default, kDirectionRateScale); not refined
+  std::string channel_term{};  // grad:A-B or gradrate:A-B: a measured gradient, no constant of its own
+
+  bool measured() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
 
   std::string name(double node_tau) const {
     switch (kind) {
@@ -30,6 +33,8 @@ struct DynamicTerm {
         return rate_scale > 0 ? fmt::format("dir:{}:{}:{}", tau, node_tau, rate_scale) : fmt::format("dir:{}:{}", tau, node_tau);
       case Kind::second_lag: return fmt::format("lag:{}", tau);
       case Kind::play: return fmt::format("play:{}:{}", node_tau, tau);
+      case Kind::channel_gradient:
+      case Kind::channel_gradient_rate: return channel_term;
     }
     return {};
   }
@@ -43,6 +48,8 @@ struct DynamicTerm {
       case Kind::memory: return 3000;
       case Kind::second_lag: return 1200;
       case Kind::play: return 10;
+      case Kind::channel_gradient:
+      case Kind::channel_gradient_rate: return 0;
     }
     return 0;
   }
@@ -72,6 +79,11 @@ struct NodeModel {
   std::vector<DynamicTerm> dynamics;
 
   bool plain() const { return tau2 == 0 && zero == 0; }
+  // Dynamic terms with states of their own (a measured gradient has none): at most
+  // max_dynamic_terms of them.
+  std::size_t modelled_dynamics() const {
+    return static_cast<std::size_t>(std::count_if(dynamics.begin(), dynamics.end(), [](const DynamicTerm& t) { return !t.measured(); }));
+  }
   // The lag the dynamic terms read: the node's, or the sum of a series pair's.
   double dynamics_tau() const { return tau + tau2; }
 
@@ -99,6 +111,7 @@ struct NodeModel {
     if (tau2 > 0) out.push_back({&tau2, 1, shortest, longest});
     if (zero > 0) out.push_back({&zero, 1, shortest, longest});
     for (auto& term : dynamics) {
+      if (term.measured()) continue;
       out.push_back({&term.tau, term.resolution(), term.shortest(2 * shortest),
                      term.kind == DynamicTerm::Kind::play ? term.longest() : std::min(term.longest(), longest)});
     }
@@ -131,7 +144,7 @@ constexpr double kDistinctRatio = 1.5;
 bool distinct(const NodeModel& model) {
   for (std::size_t i = 0; i < model.dynamics.size(); ++i) {
     const auto& a = model.dynamics[i];
-    if (a.tau > a.longest()) return false;
+    if (!a.measured() && a.tau > a.longest()) return false;
     if (a.kind == DynamicTerm::Kind::second_lag &&
         std::max(a.tau, model.dynamics_tau()) < kDistinctRatio * std::min(a.tau, model.dynamics_tau())) {
       return false;
@@ -168,7 +181,11 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   auto score = [&](const NodeModel& model) {
     options.stop.throw_if_requested("feature identification");
     ++result.candidates_scored;
-    return least_squares_cv(cache.matrix(model.terms()), y, result.held_out.blocks);
+    // The node's level and its hinges are one part: a piecewise-linear map cancels by design.
+    const auto [cv, cancelled] = least_squares_cv_score(cache.matrix(model.terms()), y, result.held_out.blocks,
+                                                        static_cast<Eigen::Index>(1 + model.knots.size()));
+    const double excess = cancelled / options.max_cancellation;
+    return excess > 1 ? cv * excess * excess : cv;
   };
   result.start_mse = least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, result.held_out.blocks);
 
@@ -364,8 +381,12 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       candidates.push_back({DynamicTerm::Kind::memory, tau, memory_scale});
     }
     for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
+    for (const auto& term : channel_candidate_terms(logs.front(), axis)) {
+      const bool rate = term.rfind("gradrate:", 0) == 0;
+      candidates.push_back({rate ? DynamicTerm::Kind::channel_gradient_rate : DynamicTerm::Kind::channel_gradient, 0, 0, term});
+    }
     const double keep = 1.0 - options.min_gain;
-    while (best.dynamics.size() < options.max_dynamic_terms) {
+    for (;;) {
       std::vector<std::pair<double, NodeModel>> ranked;
       auto offer = [&](const std::vector<DynamicTerm>& terms) {
         NodeModel trial = best;
@@ -373,7 +394,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
           if (std::find(trial.dynamics.begin(), trial.dynamics.end(), term) != trial.dynamics.end()) return;
           trial.dynamics.push_back(term);
         }
-        if (trial.dynamics.size() > options.max_dynamic_terms || !distinct(trial)) return;
+        if (trial.modelled_dynamics() > options.max_dynamic_terms || !distinct(trial)) return;
         ranked.emplace_back(score(trial), std::move(trial));
       };
       for (const auto& candidate : candidates) {

@@ -34,6 +34,12 @@ struct FeatureSelectionOptions {
   double min_time_constant = 15;      // s: the node's lag grid starts here, steps of √2
   double max_time_constant = 5400;    // s: and stops here or at a quarter of the training span
   std::size_t max_dynamic_terms = 3;  // thermal_node: at most one Shupe term, one memory, one second lag
+  // thermal_node: a set whose least-squares fit cancels more than this (cancellation():
+  // the parts' spreads over the fit's, the static map one part) scores its CV MSE times
+  // (cancellation / this)². A fit that is a small difference of large terms turns any
+  // mismatch of one part on new data (a lag started elsewhere, another ramp rate) into a
+  // large error; identified models cancel 1.5-12 times, the ones that failed 200 and more.
+  double max_cancellation = 30;
   // Asked before each set is scored (both methods): a stop request throws Interrupted.
   StopToken stop;
   // Axes searched at once by select_features_per_axis (and so by calibrate); each axis'
