@@ -20,7 +20,12 @@ endfunction()
 
 # A GoogleTest executable from every *_test.cpp in a folder, registered with CTest.
 function(thermodrift_test_folder name folder)
-  cmake_parse_arguments(ARG "" "" "DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "COST" "DEPS;LABELS" ${ARGN})
+  # COST: ctest starts the costlier folders first, so a long test does not run alone at
+  # the end of a parallel run (a fresh clone has no timing data of its own).
+  if(NOT ARG_COST)
+    set(ARG_COST 0)
+  endif()
   file(GLOB sources CONFIGURE_DEPENDS ${folder}/*_test.cpp)
   if(NOT sources)
     return()
@@ -31,5 +36,5 @@ function(thermodrift_test_folder name folder)
     THERMODRIFT_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     THERMODRIFT_SHARED_DATA="${PROJECT_SOURCE_DIR}/../shared/data"
     THERMODRIFT_BINARY="$<TARGET_FILE:thermodrift_cli>")
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}" COST ${ARG_COST})
 endfunction()
