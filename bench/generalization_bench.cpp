@@ -5,7 +5,7 @@
 //                                  [--methods paper,linear,stepwise,svr,oracle] [--threads N]
 //                                  [--evaluations N] [--training cycle|two-runs]
 //                                  [--folds-by time|runs] [--sensor drawn|coil]
-//                                  [--oracle-without NAME,...] [--json FILE]
+//                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
 // is the training log, cycle 2 the "next cycle". Two other profiles of two distinct
@@ -94,6 +94,8 @@ struct Arguments {
   // temperature column is the coil's and no thermal path lies between them.
   bool sensor_on_coil = false;
   std::vector<std::size_t> oracle_without;  // regressors the oracle leaves out (sim::law_regressor_names)
+  std::optional<double> rate_span;          // --rate-span of the --features auto methods (fit's default if absent)
+  bool other_channels = FeatureSelectionOptions{}.other_channels;  // --node-channel any|own
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -123,6 +125,8 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--threads") args.threads = std::max(1, std::stoi(value));
     else if (flag == "--evaluations") args.evaluations = std::stol(value);
     else if (flag == "--json") args.json = value;
+    else if (flag == "--rate-span") args.rate_span = std::stod(value);
+    else if (flag == "--node-channel" && (value == "own" || value == "any")) args.other_channels = value == "any";
     else if (flag == "--identify" && (value == "greedy" || value == "thermal-node")) {
       args.identify = value == "greedy" ? FeatureSelectionOptions::Method::greedy
                                         : FeatureSelectionOptions::Method::thermal_node;
@@ -404,7 +408,9 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     try {
       CalibrationOptions options = fit_options(method, args.evaluations);
       options.selection.method = args.identify;
+      options.selection.other_channels = args.other_channels;
       options.folds_by = args.folds_by;
+      if (args.rate_span && method != Method::paper) options.rate_span_seconds = args.rate_span;
       if (chooses_features(options)) {
         if (selections.empty()) {
           const Stopwatch search_clock;

@@ -360,7 +360,8 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
         "  }}\n"
         "  {{\n"
         "    {p}_real features[{d}];\n",
-        fmt::arg("p", p), fmt::arg("a", a), fmt::arg("d", terms.size()), fmt::arg("temperature", temperature(a)));
+        fmt::arg("p", p), fmt::arg("a", a), fmt::arg("d", terms.size()),
+        fmt::arg("temperature", temperature(model.axes[a].pipeline.temperature_input(a))));
     // The channels grad terms read: smoothed beside the axis' own, slot by slot.
     const std::vector<std::size_t> channels = model.axes[a].pipeline.channels();
     if (!channels.empty()) {

@@ -50,7 +50,7 @@ const Compensator::Output& Compensator::push(double time, std::span<const double
   }
   bool ready = true;
   for (std::size_t a = 0; a < streams_.size(); ++a) {
-    const auto& sample = streams_[a].push(time, gyro[a], temperatures[a], temperatures);
+    const auto& sample = streams_[a].push(time, gyro[a], temperatures[model_.axes[a].pipeline.temperature_input(a)], temperatures);
     drift_[a] = model_.axes[a].predict(sample.features);
     compensated_[a] = gyro[a] - drift_[a];
     const auto& envelope = model_.axes[a].envelope;

@@ -52,6 +52,10 @@ void Pipeline::validate() const {
   if (decimation < 1) throw UsageError("decimation must be at least 1");
   if (!std::isfinite(reference_temperature)) throw UsageError("reference temperature is not finite");
   if (terms.empty()) throw UsageError("a pipeline needs at least one feature term");
+  if (temperature_channel && *temperature_channel >= kMaxTemperatureChannels) {
+    throw UsageError(fmt::format("temperature channel {} is beyond the {} a model can read",
+                                 *temperature_channel + 1, kMaxTemperatureChannels));
+  }
 }
 
 Pipeline Pipeline::libsvm_input(std::size_t columns) {
@@ -67,14 +71,17 @@ Pipeline Pipeline::libsvm_input(std::size_t columns) {
 
 nlohmann::json Pipeline::to_json() const {
   if (libsvm) return {{"version", kVersion}, {"input", "libsvm"}, {"terms", term_names()}};
-  return {{"version", kVersion},
-          {"smooth_seconds", smooth_seconds},
-          {"window", "trailing"},
-          {"rate_span_seconds", rate_span_seconds},
-          {"gap_seconds", effective_gap_seconds()},
-          {"decimation", decimation},
-          {"reference_temperature", reference_temperature},
-          {"terms", term_names()}};
+  nlohmann::json json = {{"version", kVersion},
+                         {"smooth_seconds", smooth_seconds},
+                         {"window", "trailing"},
+                         {"rate_span_seconds", rate_span_seconds},
+                         {"gap_seconds", effective_gap_seconds()},
+                         {"decimation", decimation},
+                         {"reference_temperature", reference_temperature},
+                         {"terms", term_names()}};
+  // 1-based, like the channels of grad:A-B.
+  if (temperature_channel) json["temperature_channel"] = *temperature_channel + 1;
+  return json;
 }
 
 Pipeline Pipeline::from_json(const nlohmann::json& json) {
@@ -98,6 +105,11 @@ Pipeline Pipeline::from_json(const nlohmann::json& json) {
   pipeline.gap_seconds = json.at("gap_seconds").get<double>();
   pipeline.decimation = json_integer<std::size_t>(json.at("decimation"), "decimation");
   pipeline.reference_temperature = json.at("reference_temperature").get<double>();
+  if (json.contains("temperature_channel")) {
+    const auto channel = json_integer<std::size_t>(json.at("temperature_channel"), "temperature_channel");
+    if (channel < 1) throw Error("temperature_channel counts from 1");
+    pipeline.temperature_channel = channel - 1;
+  }
   pipeline.terms.clear();
   for (const auto& term : json.at("terms")) pipeline.terms.push_back(FeatureTerm::parse(term.get<std::string>()));
   pipeline.validate();
@@ -199,10 +211,14 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
   table.run_start = {0};
   std::size_t ready_count = 0;
   std::vector<double> channels(pipeline.channels().empty() ? 0 : log.temperature.size());
+  const std::size_t node_channel = pipeline.temperature_input(temperature_channel);
+  if (node_channel >= log.temperature.size()) {
+    throw UsageError(fmt::format("the model computes ΔT from temperature channel {}, but {} channel(s) are given",
+                                 node_channel + 1, log.temperature.size()));
+  }
   for (std::size_t i = 0; i < log.rows(); ++i) {
     for (std::size_t c = 0; c < channels.size(); ++c) channels[c] = log.temperature[c][i];
-    const auto& sample = stream.push(log.time[i], log.gyro[gyro_axis][i],
-                                     log.temperature[temperature_channel][i], channels);
+    const auto& sample = stream.push(log.time[i], log.gyro[gyro_axis][i], log.temperature[node_channel][i], channels);
     if (!sample.ready) {
       ready_count = 0;  // decimation restarts with each warm-up
       continue;

@@ -248,6 +248,10 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
                                     "input(s)", channel + 1, inputs));
           }
         }
+        if (axis.pipeline.temperature_input(0) >= inputs) {
+          throw Error(fmt::format("temperature_channel is {}, but the model has {} temperature input(s)",
+                                  axis.pipeline.temperature_input(0) + 1, inputs));
+        }
         // Whatever the checks above did not read: the fit record is informational.
         if (auto bad = find_bad_number(entry, "", "fit")) throw Error(*bad);
         model.axes.push_back(std::move(axis));

@@ -53,9 +53,10 @@ LogScaling model_scaling(const LogScaling& log, const std::vector<std::size_t>& 
 std::vector<std::string> extra_temperature_columns(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                                                    const std::vector<Pipeline>& pipelines) {
   const ChamberLog& log = logs.front();
-  std::size_t used = 0;  // channels up to the highest a grad term reads
+  std::size_t used = 0;  // channels up to the highest a grad term or a node reads
   for (const auto& pipeline : pipelines) {
     for (const std::size_t channel : pipeline.channels()) used = std::max(used, channel + 1);
+    if (pipeline.temperature_channel) used = std::max(used, *pipeline.temperature_channel + 1);
   }
   if (used == 0) return {};
   if (log.temperature.size() < log.axes()) {
@@ -511,6 +512,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
       }
       axis_model.pipeline.terms.clear();
       for (const auto& term : selection.terms) axis_model.pipeline.terms.push_back(FeatureTerm::parse(term));
+      axis_model.pipeline.temperature_channel = selection.temperature_channel;
       axis_model.pipeline.validate();
       selection_json = selection.to_json(selection_options);
       linear_fit = std::move(selection.linear_fit);

@@ -106,16 +106,18 @@ nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options)
   for (const auto& step : path) {
     steps.push_back({{"action", step.action}, {"term", step.term}, {"cv_mse", step.cv_mse}, {"terms", step.terms}});
   }
-  return {{"method", options.method == FeatureSelectionOptions::Method::thermal_node ? "thermal_node" : "greedy"},
-          {"scored_by", scored_by},
-          {"folds", held_out.blocks.size()},
-          {"folds_by", to_string(held_out.by)},
-          {"min_gain", options.min_gain},
-          {"start_mse", start_mse},
-          {"cv_mse", cv_mse},
-          {"candidates_scored", candidates_scored},
-          {"terms", terms},
-          {"path", steps}};
+  nlohmann::json json = {{"method", options.method == FeatureSelectionOptions::Method::thermal_node ? "thermal_node" : "greedy"},
+                         {"scored_by", scored_by},
+                         {"folds", held_out.blocks.size()},
+                         {"folds_by", to_string(held_out.by)},
+                         {"min_gain", options.min_gain},
+                         {"start_mse", start_mse},
+                         {"cv_mse", cv_mse},
+                         {"candidates_scored", candidates_scored},
+                         {"terms", terms},
+                         {"path", steps}};
+  if (temperature_channel) json["temperature_channel"] = *temperature_channel + 1;
+  return json;
 }
 
 namespace {

@@ -169,20 +169,38 @@ double training_span_seconds(const std::vector<ChamberLog>& logs) {
 
 FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std::size_t axis,
                                        const Pipeline& pipeline, const FeatureSelectionOptions& options) {
-  ColumnCache cache(logs, axis, pipeline);
-  const Eigen::VectorXd& y = cache.target();
+  // One column cache per temperature channel the node may be found on: the axis' own, and
+  // with one thermometer per axis (or more) every other one too. Another axis' thermometer
+  // can sit on this axis' coil (or nearer to it than its own, which may be on another
+  // block): a node on that channel needs no lead to undo its own sensor's lag.
+  const std::size_t own = temperature_channel_per_axis(logs.front()).at(axis);
+  std::vector<std::size_t> channels{own};
+  if (options.other_channels && logs.front().temperature.size() >= logs.front().axes()) {
+    for (std::size_t c = 0; c < logs.front().temperature.size(); ++c) {
+      if (c != own) channels.push_back(c);
+    }
+  }
+  std::vector<ColumnCache> caches;
+  caches.reserve(channels.size());
+  for (const std::size_t channel : channels) {
+    Pipeline on_channel = pipeline;
+    if (channel != own) on_channel.temperature_channel = channel;
+    caches.emplace_back(logs, axis, on_channel);
+  }
+  ColumnCache* cache = &caches.front();
+  const Eigen::VectorXd& y = cache->target();
   if (y.size() < 4 * options.folds) {
     throw UsageError(fmt::format("--features auto: {} samples are too few for {}-fold identification", y.size(),
                                  options.folds));
   }
   FeatureSelection result;
   result.scored_by = "least_squares";
-  result.held_out = cache.blocks(options.folds, options.folds_by);
+  result.held_out = cache->blocks(options.folds, options.folds_by);
   auto score = [&](const NodeModel& model) {
     options.stop.throw_if_requested("feature identification");
     ++result.candidates_scored;
     // The node's level and its hinges are one part: a piecewise-linear map cancels by design.
-    const auto [cv, cancelled] = least_squares_cv_score(cache.matrix(model.terms()), y, result.held_out.blocks,
+    const auto [cv, cancelled] = least_squares_cv_score(cache->matrix(model.terms()), y, result.held_out.blocks,
                                                         static_cast<Eigen::Index>(1 + model.knots.size()));
     const double excess = cancelled / options.max_cancellation;
     return excess > 1 ? cv * excess * excess : cv;
@@ -199,28 +217,34 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   }
   if (grid.empty()) grid.push_back(options.min_time_constant);
 
-  NodeModel best;
-  best.knots = spread_knots(cache.matrix({"dT"}).col(0), options.knots);
-  // A lagging node on the grid. (A node that leads the sensor, ΔT + τ·rate, was tried as an
-  // alternative: on the development laws it won the CV by a fifth where the sensor sat on
-  // another block and then failed the next cycle by 100-600x; the lead-lag below holds
-  // that case with a lag to smooth the rate.)
-  double best_cv = kInfinity;
-  for (const double tau : grid) {
-    NodeModel trial = best;
-    trial.tau = tau;
-    const double cv = score(trial);
-    if (cv < best_cv) best_cv = cv, best.tau = tau;
-  }
-  result.path.push_back({"node", fmt::format("lag {} s of {} on the grid", best.tau, grid.size()), best_cv, best.terms()});
-
-  // A node with a second pole or a zero (nodehinge): a coil two nodes behind the sensor,
-  // or on another thermal path than the sensor's (the sensor on another axis' block lags the
-  // common source by TL, the coil by T1). Each must beat the single lag by min_gain: two
-  // grids, the series pair with T2 <= T1 (the order of two lags does not matter).
-  NodeModel runner_up;  // the node structure not chosen (plain or structured), for the average
-  double runner_up_cv = kInfinity;
-  {
+  // The node on one channel: a lag on the grid, then a node with a second pole or a zero.
+  struct Node {
+    NodeModel best, runner_up;  // runner_up: the structure not chosen (plain or structured), for the average
+    double best_cv = kInfinity, runner_up_cv = kInfinity;
+    double lag_cv = kInfinity;  // the single lag's
+    std::vector<SelectionStep> path;
+  };
+  auto find_node = [&]() {
+    Node node;
+    NodeModel& best = node.best;
+    double& best_cv = node.best_cv;
+    best.knots = spread_knots(cache->matrix({"dT"}).col(0), options.knots);
+    // A lagging node on the grid. (A node that leads the sensor, ΔT + τ·rate, was tried as
+    // an alternative: on the development laws it won the CV by a fifth where the sensor sat
+    // on another block and then failed the next cycle by 100-600x; the lead-lag below holds
+    // that case with a lag to smooth the rate.)
+    for (const double tau : grid) {
+      NodeModel trial = best;
+      trial.tau = tau;
+      const double cv = score(trial);
+      if (cv < best_cv) best_cv = cv, best.tau = tau;
+    }
+    node.lag_cv = best_cv;
+    node.path.push_back({"node", fmt::format("lag {} s of {} on the grid", best.tau, grid.size()), best_cv, best.terms()});
+    // A node with a second pole or a zero (nodehinge): a coil two nodes behind the sensor,
+    // or on another thermal path than the sensor's (the sensor on another axis' block lags
+    // the common source by TL, the coil by T1). Each must beat the single lag by min_gain:
+    // two grids, the series pair with T2 <= T1 (the order of two lags does not matter).
     NodeModel structured = best;
     double structured_cv = kInfinity;
     for (const double t1 : grid) {
@@ -235,15 +259,51 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
         }
       }
     }
-    runner_up = structured, runner_up_cv = structured_cv;
+    node.runner_up = structured, node.runner_up_cv = structured_cv;
     if (structured_cv < (1.0 - options.min_gain) * best_cv) {
-      runner_up = best, runner_up_cv = best_cv;
+      node.runner_up = best, node.runner_up_cv = best_cv;
       best = std::move(structured), best_cv = structured_cv;
-      result.path.push_back({"node", best.tau2 > 0 ? fmt::format("lags {} s and {} s in series", best.tau, best.tau2)
-                                                   : fmt::format("lag {} s, lead {} s", best.tau, best.zero),
-                             best_cv, best.terms()});
+      node.path.push_back({"node", best.tau2 > 0 ? fmt::format("lags {} s and {} s in series", best.tau, best.tau2)
+                                                 : fmt::format("lag {} s, lead {} s", best.tau, best.zero),
+                           best_cv, best.terms()});
+    }
+    return node;
+  };
+  // On each channel. Another channel is taken when its single lag beats the own channel's
+  // by min_gain (a node that is a plain lag of a thermometer needs no lead, which one cycle
+  // identifies poorly: development law 13, z, whose own sensor sits 1,900 s upstream on
+  // another block, missed other programmes by 1,300x the floor with a lead-lag on it) and
+  // the own channel's whole node (the richer nodes included) does not beat its whole node
+  // by min_gain (a case thermometer 2,700 s upstream of a coil beat, as a single lag, the
+  // axis' own 170 s from the coil behind a second node, and then missed another programme
+  // by 1,600x: law 11, y).
+  std::vector<Node> nodes;
+  for (ColumnCache& on : caches) {
+    cache = &on;
+    nodes.push_back(find_node());
+    if (caches.size() > 1) {
+      result.path.push_back({"channel", fmt::format("temperature channel {}: {}", channels[nodes.size() - 1] + 1,
+                                                    nodes.back().path.back().term),
+                             nodes.back().best_cv, nodes.back().best.terms()});
     }
   }
+  std::size_t best_channel = 0;
+  const double keep = 1.0 - options.min_gain;
+  for (std::size_t k = 1; k < nodes.size(); ++k) {
+    if (nodes[k].lag_cv < keep * nodes.front().lag_cv && !(nodes.front().best_cv < keep * nodes[k].best_cv) &&
+        (best_channel == 0 || nodes[k].best_cv < nodes[best_channel].best_cv)) {
+      best_channel = k;
+    }
+  }
+  cache = &caches[best_channel];
+  if (best_channel != 0) result.temperature_channel = channels[best_channel];
+  Node& found = nodes[best_channel];
+  for (auto& step : found.path) {
+    if (best_channel != 0) step.term += fmt::format(", on temperature channel {}", channels[best_channel] + 1);
+    result.path.push_back(std::move(step));
+  }
+  NodeModel best = std::move(found.best), runner_up = std::move(found.runner_up);
+  double best_cv = found.best_cv, runner_up_cv = found.runner_up_cv;
 
   // A model's constants are all identifiable from the log and its terms distinct.
   const double shortest = options.min_time_constant / 2;
@@ -385,7 +445,6 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       const bool rate = term.rfind("gradrate:", 0) == 0;
       candidates.push_back({rate ? DynamicTerm::Kind::channel_gradient_rate : DynamicTerm::Kind::channel_gradient, 0, 0, term});
     }
-    const double keep = 1.0 - options.min_gain;
     for (;;) {
       std::vector<std::pair<double, NodeModel>> ranked;
       auto offer = [&](const std::vector<DynamicTerm>& terms) {
@@ -492,7 +551,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());
   const double weight = 1.0 / static_cast<double>(kept.size());
   for (const auto& member : kept) {
-    const Eigen::MatrixXd x = cache.matrix(member.terms);
+    const Eigen::MatrixXd x = cache->matrix(member.terms);
     const LinearModel fit = fit_least_squares(x, y, linear_regressors(member.terms.size()));
     for (std::size_t j = 0; j < member.terms.size(); ++j) {
       const auto column = std::find(names.begin(), names.end(), member.terms[j]) - names.begin();

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -25,6 +26,11 @@ struct Pipeline {
   double gap_seconds = 0;           // a time step longer than this restarts the warm-up; 0: smooth_seconds (at least 10 s)
   std::size_t decimation = 1;       // fitting keeps every k-th ready sample (neighbours of a 100 s mean are near copies)
   double reference_temperature = 0; // ΔT = T_s - reference, °C; set from the training log
+  // The temperature channel ΔT, its rate and every lag of it are computed from (0-based,
+  // in the model's temperature inputs: one per axis, then the extra ones): absent, the
+  // axis' own. Another axis' thermometer can sit on this axis' coil, closer to it than
+  // its own (docs/features.md, "The node's thermometer").
+  std::optional<std::size_t> temperature_channel;
   std::vector<FeatureTerm> terms{FeatureTerm{FeatureTerm::Kind::delta_t},
                                  FeatureTerm{FeatureTerm::Kind::rate}};
 
@@ -39,6 +45,8 @@ struct Pipeline {
   std::vector<std::string> term_names() const;
   // The temperature channels (0-based, sorted, distinct) its grad terms read.
   std::vector<std::size_t> channels() const;
+  // The channel ΔT is computed from, for an axis whose own channel is `own`.
+  std::size_t temperature_input(std::size_t own) const { return temperature_channel.value_or(own); }
   // The longest time constant of its terms, s (0 for the paper's pair).
   double longest_time_constant() const;
   void validate() const;  // UsageError on nonsense (negative window, no terms, ...)

@@ -40,6 +40,12 @@ struct FeatureSelectionOptions {
   // mismatch of one part on new data (a lag started elsewhere, another ramp rate) into a
   // large error; identified models cancel 1.5-12 times, the ones that failed 200 and more.
   double max_cancellation = 30;
+  // thermal_node: with one thermometer per axis (or more), look for the node on every
+  // channel, not only the axis' own: another axis' thermometer may sit on this axis' coil
+  // (the rule: thermal_node.cpp). Off by default: on ten development laws it took the
+  // worst case of some axes from 1,300x the floor to 2-4x and made others 5-10x worse
+  // (docs/features.md, "The node's thermometer").
+  bool other_channels = false;
   // Asked before each set is scored (both methods): a stop request throws Interrupted.
   StopToken stop;
   // Axes searched at once by select_features_per_axis (and so by calibrate); each axis'
@@ -95,6 +101,9 @@ struct FeatureSelection {
   // over `terms` (the union of their sets): the linear model, or the SVR's linear part,
   // instead of a least-squares refit on the union.
   std::optional<LinearModel> linear_fit;
+  // thermal_node: the temperature channel the node was found on, when not the axis' own
+  // (Pipeline::temperature_channel).
+  std::optional<std::size_t> temperature_channel;
 
   nlohmann::json to_json(const FeatureSelectionOptions& options) const;
 };

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,8 +57,10 @@ Pipeline chamber_pipeline() {
 }
 
 // One model per axis fitted on the log: "linear" (quadratic regressors, to exercise
-// powers) or "svr" (fixed C, γ, ε; a few hundred support vectors).
-DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const std::vector<std::string>& terms = {}) {
+// powers) or "svr" (fixed C, γ, ε; a few hundred support vectors). `node_channels[a]`:
+// the temperature channel axis a's ΔT is computed from (Pipeline::temperature_channel).
+DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const std::vector<std::string>& terms = {},
+                        const std::vector<std::optional<std::size_t>>& node_channels = {}) {
   DriftModel model;
   model.time_column = "time_s";
   for (std::size_t a = 0; a < log.axes(); ++a) {
@@ -70,6 +73,7 @@ DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const st
       axis.pipeline.terms.clear();
       for (const auto& term : terms) axis.pipeline.terms.push_back(FeatureTerm::parse(term));
     }
+    if (a < node_channels.size()) axis.pipeline.temperature_channel = node_channels[a];
     axis.kind = kind;
     const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
     if (kind == "linear") {
@@ -96,6 +100,7 @@ DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const st
   std::size_t used = 0;
   for (const auto& axis : model.axes) {
     for (const std::size_t channel : axis.pipeline.channels()) used = std::max(used, channel + 1);
+    used = std::max(used, axis.pipeline.temperature_input(0) + 1);
   }
   for (std::size_t c = log.axes(); c < used; ++c) model.extra_temperature_columns.push_back(log.temperature_names[c]);
   return model;
@@ -337,6 +342,27 @@ TEST_F(CExport, ChannelGradientTermsMatchCompensatorThroughAGap) {
   expect_matches(svr, cut, true, 5e-4);
   const std::string header = export_c_header(linear, {});
   EXPECT_NE(header.find("#define THERMODRIFT_TEMPERATURES 4"), std::string::npos);
+}
+
+// An axis whose node is on another channel than its own (the chamber air, another
+// axis' thermometer): the header reads that channel for it, as the compensator does,
+// and the model file keeps the choice.
+TEST_F(CExport, NodeOnAnotherChannelMatchesCompensator) {
+  const ChamberLog log = with_chamber_channel(*log_);
+  const std::vector<std::string> terms = {"dT", "lag:420", "lagrate:420", "hinge:420:5", "rate"};
+  const DriftModel linear = fitted_model(log, "linear", terms, {3, 2, std::nullopt});
+  ASSERT_EQ(linear.extra_temperature_columns, (std::vector<std::string>{"temp_chamber"}));
+  const DriftModel own = fitted_model(log, "linear", terms);
+  ASSERT_NE(run_compensator(linear, log).compensated, run_compensator(own, log).compensated)
+      << "the channel changed nothing";
+  const ChamberLog cut = without_rows(log, 5000, 5600);
+  expect_matches(linear, cut, false, 1e-9);
+  expect_matches(linear, cut, true, 1e-4);
+  const DriftModel reloaded = drift_model_from_json(to_json(linear), "model.json");
+  EXPECT_EQ(reloaded.axes[0].pipeline.temperature_channel, std::optional<std::size_t>(3));
+  EXPECT_EQ(reloaded.axes[1].pipeline.temperature_channel, std::optional<std::size_t>(2));
+  EXPECT_FALSE(reloaded.axes[2].pipeline.temperature_channel.has_value());
+  EXPECT_EQ(to_json(linear).dump(), to_json(reloaded).dump());
 }
 
 TEST_F(CExport, WarmUpAndGapRestartLikeTheCompensator) {

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <utility>
 #include <string>
 #include <variant>
@@ -164,6 +166,42 @@ TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
   EXPECT_LT(width, 4.0);
 }
 
+// Thermometers swapped between blocks: x's own sits on y's far node (a 1600 s node behind
+// a 400 s one), y's own on x's coil (600 s behind the case). Each axis' coil is then
+// measured by the other axis' thermometer, and its own lags or leads it by a thousand
+// seconds. The node is found on the other channel, its delay behind that thermometer is
+// short, and the next cycle is held to the same bound as the plain units above.
+TEST(ThermalNode, FindsTheNodeOnAnotherAxisThermometer) {
+  sim::UnitLaw unit = known_unit();
+  unit.axes[0].hysteresis = sim::HysteresisKind::none;
+  unit.axes[1].node_time_constants_s = {400, 1600};
+  unit.axes[0].sensor_axis = 1, unit.axes[0].sensor_node = 1;
+  unit.axes[1].sensor_axis = 0, unit.axes[1].sensor_node = 0;
+  const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 2), 4);
+  const std::size_t split = run.cycle_start_rows().at(1);
+  const ChamberLog log = sim::to_chamber_log(run);
+  const ChamberLog first_cycle = slice_rows(log, 0, split);
+
+  CalibrationOptions options;
+  options.model = "linear";
+  options.terms = {"auto"};
+  options.selection.other_channels = true;
+  const Calibration calibration = calibrate({first_cycle}, LogSpec{}, options);
+  const auto held_out = evaluate_from(calibration.model, log, split);
+  options.selection.other_channels = false;
+  const auto own_channel = evaluate_from(calibrate({first_cycle}, LogSpec{}, options).model, log, split);
+  const auto floor = run.noise_floor(100, split);
+  const std::optional<std::size_t> expected[3] = {1, 0, std::nullopt};
+  for (std::size_t a = 0; a < 3; ++a) {
+    const Pipeline& pipeline = calibration.model.axes[a].pipeline;
+    std::printf("%c: channel %zu, delay %.0f s, held-out %.2f x floor (own channel only: %.2f); %s\n", "xyz"[a],
+                pipeline.temperature_input(a) + 1, node_delay(pipeline), held_out[a].mse_after / floor[a],
+                own_channel[a].mse_after / floor[a], fmt::format("{}", fmt::join(pipeline.term_names(), " ")).c_str());
+    EXPECT_EQ(pipeline.temperature_channel, expected[a]) << "xyz"[a];
+  }
+  EXPECT_LT(std::abs(node_delay(calibration.model.axes[0].pipeline)), 300.0) << "x's coil is y's thermometer's node";
+}
+
 // A fit that is a small difference of large terms fails on any data whose states differ
 // from the training log's. Development law 29, axis y: z's thermometer sits on y's coil,
 // y's own on the case, so the measured gradient grad:2-3 is nearly the coil's lag behind
@@ -193,6 +231,9 @@ TEST(ThermalNode, BoundsHowMuchTheFitCancels) {
     options.model = "linear";
     options.terms = {"auto"};
     if (!bounded) options.selection.max_cancellation = std::numeric_limits<double>::infinity();
+    // On y's own channel (the default): on z's, which sits on y's coil, the node is a plain
+    // 8 s lag that cancels nothing (137x on the next cycle): nothing to bound.
+    options.selection.other_channels = false;
     const Calibration calibration = calibrate({training}, LogSpec{}, options);
     const AxisModel& axis = calibration.model.axes[0];
     const FeatureTable table = feature_table({training}, axis.pipeline, 0, true);
