@@ -426,6 +426,8 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       for (std::size_t a = 0; a < 3; ++a) {
         result.in_sample[a] = calibration.axes[a].in_sample.mse_after / training_floor[a];
         result.terms[a] = calibration.model.axes[a].pipeline.term_names();
+        const auto& channel = calibration.model.axes[a].pipeline.temperature_channel;
+        result.temperature_channel[a] = channel ? *channel + 1 : 0;
       }
       for (const auto& test : tests) {
         const auto metrics = test.carried_from_row ? evaluate_from(calibration.model, test.log, *test.carried_from_row)

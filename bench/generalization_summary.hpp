@@ -74,6 +74,7 @@ struct MethodResult {
   Cost search;  // the shared least-squares search (auto methods; zero for paper)
   std::array<double, 3> in_sample{};  // in-sample MSE / the training cycle's floor
   std::array<std::vector<std::string>, 3> terms;
+  std::array<std::size_t, 3> temperature_channel{};  // 1-based channel of the axis' node; 0: its own
   std::vector<TestResult> tests;  // in LawResult::tests order
   std::string error;              // calibrate or evaluate threw: every ratio counts as infinite
 
@@ -306,6 +307,7 @@ inline nlohmann::json laws_json(const std::vector<LawResult>& laws) {
         }
         entry["in_sample_ratio"] = result.in_sample;
         entry["terms"] = result.terms;
+        entry["temperature_channel"] = result.temperature_channel;
         entry["tests"] = tests;
       }
       methods.push_back(entry);

@@ -30,6 +30,7 @@ struct FitArguments {
   std::size_t decimate = 0;
   std::vector<std::string> features{"dT", "rate"};
   FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
+  std::string node_channel = "own";
   std::string tune;
   std::string objective = "cv";
   std::uint64_t seed = 1;
@@ -51,6 +52,10 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       if (app.count(option)) throw UsageError(fmt::format("{} applies to --model svr, not {}", option, args.model));
     }
   }
+  const bool auto_features = args.features.size() == 1 && args.features.front() == "auto";
+  if (app.count("--node-channel") && !(auto_features && args.identify == FeatureSelectionOptions::Method::thermal_node)) {
+    throw UsageError("--node-channel applies to --features auto with the thermal-node identification");
+  }
   FitRequest request;  // the library holds the defaults and the rule of when to tune
   request.model = args.model;
   request.smooth_seconds = args.data.smooth;
@@ -58,6 +63,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   if (args.decimate > 0) request.decimation = args.decimate;
   request.terms = args.features;
   request.identify = args.identify;
+  request.other_channels = args.node_channel == "any";
   request.folds_by = parse_folds_by(args.folds_by);
   request.threads = args.threads;
   request.seed = args.seed;
@@ -178,6 +184,12 @@ Command add_fit(CLI::App& parent) {
       ->check(whole_number(1, 1000000000));
   add_list_option(*app, "--features", args->features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md");
   add_identify_option(*app, args->identify);
+  app->add_option("--node-channel", args->node_channel,
+                  "with --features auto and one --temp column per axis: look for each axis' thermal node on its "
+                  "own thermometer (own, default) or on any (any: another axis' may sit on its coil; measured "
+                  "mixed, docs/features.md)")
+      ->check(CLI::IsMember({"own", "any"}))
+      ->option_text("own|any");
   app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
       ->check(CLI::IsMember({"afsa", "grid", "random"}));
   app->add_option("--objective", args->objective,

@@ -260,6 +260,7 @@ CalibrationOptions calibration_options(const FitRequest& request) {
   options.decimation = request.decimation;
   options.terms = request.terms;
   options.selection.method = request.identify;
+  options.selection.other_channels = request.other_channels;
   options.selection.threads = threads;
   options.folds_by = request.folds_by;
   options.stop = request.stop;

@@ -58,7 +58,8 @@ void expect_round_trip(const TempDir& dir, const std::string& log, const std::st
 }
 
 // One test per law, so that ctest runs them side by side. Linear and stepwise on the
-// default search (the thermal node), and linear on the greedy search.
+// default search (the thermal node), linear on the greedy search and on the thermal node
+// looked for on every thermometer (--node-channel any).
 class FitAlwaysLoads : public ::testing::TestWithParam<int> {};
 
 TEST_P(FitAlwaysLoads, LinearAndStepwiseOnADrawnLaw) {
@@ -71,6 +72,8 @@ TEST_P(FitAlwaysLoads, LinearAndStepwiseOnADrawnLaw) {
   expect_round_trip(dir, log, "linear", "");
   expect_round_trip(dir, log, "stepwise", "");
   expect_round_trip(dir, log, "linear", " --identify greedy");
+  // The node on any thermometer: law 13's x and z thermometers sit on each other's coils.
+  expect_round_trip(dir, log, "linear", " --node-channel any");
 }
 
 INSTANTIATE_TEST_SUITE_P(DevelopmentLaws, FitAlwaysLoads, ::testing::Values(2, 8, 13));

@@ -70,6 +70,7 @@ struct FitRequest {
   std::optional<std::size_t> decimation;
   std::vector<std::string> terms{"dT", "rate"};
   FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
+  bool other_channels = FeatureSelectionOptions{}.other_channels;  // the node on any thermometer
   FoldsBy folds_by = FoldsBy::time;
   int threads = 0;  // 0: every core
   std::uint64_t seed = 1;
