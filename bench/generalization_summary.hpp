@@ -75,6 +75,9 @@ struct MethodResult {
   std::array<double, 3> in_sample{};  // in-sample MSE / the training cycle's floor
   std::array<std::vector<std::string>, 3> terms;
   std::array<std::size_t, 3> temperature_channel{};  // 1-based channel of the axis' node; 0: its own
+  // --node-channel any: per axis, each channel's node as the search scored it: {channel,
+  // single lag's CV MSE, whole node's CV MSE}
+  std::array<std::vector<std::array<double, 3>>, 3> channel_scores;
   std::vector<TestResult> tests;  // in LawResult::tests order
   std::string error;              // calibrate or evaluate threw: every ratio counts as infinite
 
@@ -308,6 +311,7 @@ inline nlohmann::json laws_json(const std::vector<LawResult>& laws) {
         entry["in_sample_ratio"] = result.in_sample;
         entry["terms"] = result.terms;
         entry["temperature_channel"] = result.temperature_channel;
+        if (!result.channel_scores[0].empty()) entry["channel_scores"] = result.channel_scores;
         entry["tests"] = tests;
       }
       methods.push_back(entry);

@@ -282,8 +282,9 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     cache = &on;
     nodes.push_back(find_node());
     if (caches.size() > 1) {
-      result.path.push_back({"channel", fmt::format("temperature channel {}: {}", channels[nodes.size() - 1] + 1,
-                                                    nodes.back().path.back().term),
+      result.path.push_back({"channel", fmt::format("temperature channel {}: {} (single lag: CV MSE {:.6g})",
+                                                    channels[nodes.size() - 1] + 1, nodes.back().path.back().term,
+                                                    nodes.back().lag_cv),
                              nodes.back().best_cv, nodes.back().best.terms()});
     }
   }
