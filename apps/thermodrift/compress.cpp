@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "data_options.hpp"
+#include "interrupt.hpp"
 #include "numbers.hpp"
 #include "output.hpp"
 #include "thermodrift/error.hpp"
@@ -50,7 +51,7 @@ int run_compress(const CompressArguments& args) {
     if (args.data.format != "csv") throw UsageError("compress --data reads chamber logs (--format csv)");
     double warm_up = 0;
     for (const auto& axis : original.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
-    const std::vector<ChamberLog> logs = args.data.read(args.data.spec_for(original), warm_up);
+    const std::vector<ChamberLog> logs = args.data.read(args.data.spec_for(original), warm_up, interrupt_token());
     const auto before = evaluate_axes(original, logs, args.settle);
     const auto after = evaluate_axes(compressed, logs, args.settle);
     for (std::size_t a = 0; a < compressed.axes.size(); ++a) {

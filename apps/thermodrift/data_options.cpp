@@ -1,6 +1,5 @@
 #include "data_options.hpp"
 #include "lists.hpp"
-#include "interrupt.hpp"
 #include "numbers.hpp"
 
 #include <fmt/format.h>
@@ -13,7 +12,19 @@
 
 namespace thermodrift::cli {
 
-void warn(const std::string& message) { std::fprintf(stderr, "thermodrift: warning: %s\n", message.c_str()); }
+namespace {
+std::function<void(const std::string&)>& warning_sink() {
+  static std::function<void(const std::string&)> sink;
+  return sink;
+}
+}  // namespace
+
+void set_warning_sink(std::function<void(const std::string&)> sink) { warning_sink() = std::move(sink); }
+
+void warn(const std::string& message) {
+  if (const auto& sink = warning_sink()) return sink(message);
+  std::fprintf(stderr, "thermodrift: warning: %s\n", message.c_str());
+}
 
 void note_despiked(const std::string& file, const std::vector<std::string>& gyro_names,
                    const std::vector<std::size_t>& gyro, const std::vector<std::string>& temperature_names,
@@ -116,11 +127,11 @@ LogSpec DataOptions::spec_for(const DriftModel& model) const {
   return spec;
 }
 
-std::vector<ChamberLog> DataOptions::read(const LogSpec& spec, double warm_up_seconds) const {
+std::vector<ChamberLog> DataOptions::read(const LogSpec& spec, double warm_up_seconds, const StopToken& stop) const {
   if (format != "csv") throw UsageError("this command reads CSV logs only (--format csv)");
   std::vector<ChamberLog> logs;
   for (const auto& file : files) {
-    logs.push_back(read_chamber_log(file, spec, interrupt_token()));
+    logs.push_back(read_chamber_log(file, spec, stop));
     for (const auto& warning : logs.back().warnings) warn(warning);
     if (spec.despike) {
       const ChamberLog& log = logs.back();

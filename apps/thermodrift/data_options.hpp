@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -53,15 +54,19 @@ struct DataOptions {
   // Reads every --data file; warnings (skipped banners, dropped rows) go to stderr. A
   // burst log whose bursts are shorter than `warm_up_seconds` (the pipeline's smoothing +
   // rate span) is collapsed to one sample per burst (io/bursts.hpp), said in one line.
-  std::vector<ChamberLog> read(const LogSpec& spec, double warm_up_seconds) const;
+  // `stop` is asked while reading (Interrupted).
+  std::vector<ChamberLog> read(const LogSpec& spec, double warm_up_seconds, const StopToken& stop) const;
 };
 
 // Declares --identify thermal-node|greedy (how `--features auto` finds the terms) for fit,
 // report and demo.
 void add_identify_option(CLI::App& app, FeatureSelectionOptions::Method& method);
 
-// "thermodrift: warning: ..." on stderr.
+// "thermodrift: warning: ..." on stderr, or to the sink set_warning_sink installed.
 void warn(const std::string& message);
+// Where warn() sends its messages from now on (the Python package: Python's warnings);
+// an empty function restores stderr.
+void set_warning_sink(std::function<void(const std::string&)> sink);
 
 // "thermodrift: FILE: despike replaced N samples (gyro_x 1, temp_x 0, ...)" on stderr.
 void note_despiked(const std::string& file, const std::vector<std::string>& gyro_names,

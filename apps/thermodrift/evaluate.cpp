@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "evaluate_command.hpp"
 #include "data_options.hpp"
 #include "interrupt.hpp"
 #include "output.hpp"
@@ -23,31 +24,27 @@ struct EvaluateArguments {
   bool json = false;
 };
 
-int run_evaluate(const EvaluateArguments& args) {
-  const DriftModel model = load_drift_model(args.model_file);
-  std::vector<AxisEvaluation> evaluations;
-  std::vector<ChamberLog> logs;
-  if (args.data.format == "libsvm") {
-    if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
-    const auto& file = args.data.files.front();
-    evaluations.push_back({evaluate_libsvm(model, read_libsvm(file, interrupt_token()), file), std::nullopt});
-  } else {
-    double warm_up = 0;
-    for (const auto& axis : model.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
-    logs = args.data.read(args.data.spec_for(model), warm_up);
-    evaluations = evaluate_axes(model, logs, args.settle, interrupt_token());
-    double longest = 0;
-    for (const auto& axis : model.axes) longest = std::max(longest, axis.pipeline.longest_time_constant());
-    if (args.settle == 0 && longest > 0) {
-      warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log; if it starts "
-                       "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics",
-                       longest, 3 * longest, 3 * longest));
-    }
+// The keys every evaluate result starts with.
+nlohmann::json evaluation_header(const std::string& model_file, double settle) {
+  return {{"command", "evaluate"},
+          {"model_file", model_file},
+          {"evaluation", "on the given logs (held-out if the model was not fitted on them)"},
+          {"settle_seconds", settle}};
+}
+
+}  // namespace
+
+nlohmann::json evaluation_result(const DriftModel& model, const std::string& model_file,
+                                 const std::vector<ChamberLog>& logs, double settle, const StopToken& stop) {
+  const std::vector<AxisEvaluation> evaluations = evaluate_axes(model, logs, settle, stop);
+  double longest = 0;
+  for (const auto& axis : model.axes) longest = std::max(longest, axis.pipeline.longest_time_constant());
+  if (settle == 0 && longest > 0) {
+    warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log; if it starts "
+                     "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics",
+                     longest, 3 * longest, 3 * longest));
   }
-  nlohmann::json result = {{"command", "evaluate"},
-                           {"model_file", args.model_file},
-                           {"evaluation", "on the given logs (held-out if the model was not fitted on them)"},
-                           {"settle_seconds", args.settle}};
+  nlohmann::json result = evaluation_header(model_file, settle);
   nlohmann::json axes = nlohmann::json::array();
   for (std::size_t a = 0; a < evaluations.size(); ++a) {
     const auto& axis = model.axes[a];
@@ -73,7 +70,7 @@ int run_evaluate(const EvaluateArguments& args) {
   if (logs.size() >= 2) {  // several runs: each on its own, then all together (above)
     nlohmann::json runs = nlohmann::json::array();
     for (const auto& log : logs) {
-      const auto per_run = evaluate_axes(model, {log}, args.settle, interrupt_token());
+      const auto per_run = evaluate_axes(model, {log}, settle, stop);
       nlohmann::json run_axes = nlohmann::json::array();
       for (std::size_t a = 0; a < per_run.size(); ++a) {
         nlohmann::json entry = per_run[a].metrics.to_json();
@@ -86,6 +83,32 @@ int run_evaluate(const EvaluateArguments& args) {
       runs.push_back({{"file", log.source}, {"axes", run_axes}});
     }
     result["runs"] = runs;
+  }
+  return result;
+}
+
+namespace {
+
+// The libsvm-format log: metrics only (no pipeline, no envelope, no noise floor).
+nlohmann::json evaluate_libsvm_file(const DriftModel& model, const std::string& file) {
+  nlohmann::json entry = evaluate_libsvm(model, read_libsvm(file, interrupt_token()), file).to_json();
+  entry["name"] = model.axes.front().name;
+  entry["model"] = model.axes.front().kind;
+  return nlohmann::json::array({entry});
+}
+
+int run_evaluate(const EvaluateArguments& args) {
+  const DriftModel model = load_drift_model(args.model_file);
+  nlohmann::json result;
+  if (args.data.format == "libsvm") {
+    if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
+    result = evaluation_header(args.model_file, args.settle);
+    result["axes"] = evaluate_libsvm_file(model, args.data.files.front());
+  } else {
+    double warm_up = 0;
+    for (const auto& axis : model.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
+    const auto logs = args.data.read(args.data.spec_for(model), warm_up, interrupt_token());
+    result = evaluation_result(model, args.model_file, logs, args.settle, interrupt_token());
   }
   print_axes(result, args.json, fmt::format("{} on {}", args.model_file, fmt::join(args.data.files, ", ")));
   return 0;

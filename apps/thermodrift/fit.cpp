@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "fit_command.hpp"
 #include "data_options.hpp"
 #include "interrupt.hpp"
 #include "output.hpp"
@@ -16,35 +17,8 @@
 
 namespace thermodrift::cli {
 
-namespace {
-
-struct FitArguments {
-  DataOptions data;
-  std::string model = "linear";
-  double C = 0;
-  double sigma = 0;
-  double gamma = 0;
-  double epsilon = 0.01;
-  double tolerance = 1e-3;
-  double rate_span = 0;
-  std::size_t decimate = 0;
-  std::vector<std::string> features{"dT", "rate"};
-  FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
-  std::string node_channel = "own";
-  std::string tune;
-  std::string objective = "cv";
-  std::uint64_t seed = 1;
-  int threads = 0;
-  long evaluations = 49;
-  int folds = 5;
-  std::string folds_by = "time";
-  bool tune_epsilon = false;
-  std::size_t max_vectors = 0;
-  std::string out;
-  bool json = false;
-};
-
-int run_fit(const FitArguments& args, const CLI::App& app) {
+FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::vector<ChamberLog> logs,
+                          const LogSpec& spec, const StopToken& stop, const FitProgress& progress) {
   if (args.model != "svr") {
     // Never silently ignored: the SVR's and its tuning's options with another model.
     for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
@@ -78,24 +52,59 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   request.folds = args.folds;
   request.tune_epsilon = args.tune_epsilon;
   if (app.count("--max-vectors")) request.max_vectors = args.max_vectors;
-  request.stop = interrupt_token();
+  request.stop = stop;
   CalibrationOptions options = calibration_options(request);
-  ProgressPrinter progress("thermodrift fit");
   std::size_t axis_count = 1;
-  options.tuning_progress = [&](std::size_t axis, const optim::Progress& p) { return progress.tuning(axis, axis_count, p); };
-  options.selection_progress = [&](std::size_t axis, const std::string& what) { progress.step(axis, axis_count, what); };
-  Calibration calibration;
-  std::vector<ChamberLog> logs;
-  if (args.data.format == "libsvm") {
-    if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
-    calibration = calibrate_libsvm(read_libsvm(args.data.files.front(), interrupt_token()), args.data.files.front(), options);
-  } else {
-    const LogSpec spec = args.data.spec();
-    logs = args.data.read(spec, args.data.warm_up_seconds(args.rate_span));
-    axis_count = logs.front().axes();
-    calibration = calibrate(logs, spec, options);
+  if (progress.tuning) {
+    options.tuning_progress = [&](std::size_t axis, const optim::Progress& p) { return progress.tuning(axis, axis_count, p); };
   }
+  if (progress.step) {
+    options.selection_progress = [&](std::size_t axis, const std::string& what) { progress.step(axis, axis_count, what); };
+  }
+  FitRun run;
+  if (args.data.format == "libsvm") {
+    if (!logs.empty() || args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
+    run.calibration =
+        calibrate_libsvm(read_libsvm(args.data.files.front(), stop), args.data.files.front(), options);
+    return run;
+  }
+  if (logs.empty()) {
+    logs = args.data.read(spec, args.data.warm_up_seconds(args.rate_span), stop);
+  } else if (!args.data.files.empty()) {
+    throw UsageError("give the data once: --data files or logs in memory, not both");
+  }
+  axis_count = logs.front().axes();
+  run.calibration = calibrate(logs, spec, options);
+  run.logs = std::move(logs);
+  return run;
+}
+
+std::vector<std::string> fit_run_warnings(const Calibration& calibration) {
+  std::vector<std::string> warnings;
+  for (std::size_t a = 0; a < calibration.model.axes.size(); ++a) {
+    const auto& axis = calibration.model.axes[a];
+    for (const auto& warning : fit_warnings(axis, calibration.axes[a].in_sample)) warnings.push_back(warning);
+    if (!axis.envelope) continue;
+    for (const auto& warning : axis.envelope->coverage_warnings()) {
+      warnings.push_back(fmt::format("{}: {}", axis.name, warning));
+    }
+  }
+  return warnings;
+}
+
+namespace {
+
+int run_fit(const FitArguments& args, const CLI::App& app) {
+  ProgressPrinter printer("thermodrift fit");
+  FitProgress progress;
+  progress.tuning = [&](std::size_t axis, std::size_t axes, const optim::Progress& p) { return printer.tuning(axis, axes, p); };
+  progress.step = [&](std::size_t axis, std::size_t axes, const std::string& what) { printer.step(axis, axes, what); };
+  const LogSpec spec = args.data.format == "libsvm" ? LogSpec{} : args.data.spec();
+  FitRun run = fit_from_arguments(args, app, {}, spec, interrupt_token(), progress);
+  const Calibration& calibration = run.calibration;
+  const std::vector<ChamberLog>& logs = run.logs;
   save_drift_model(calibration.model, args.out, args.data.files);
+  for (const auto& warning : fit_run_warnings(calibration)) warn(warning);
 
   nlohmann::json result = {{"command", "fit"}, {"model_file", args.out}, {"evaluation", "in-sample"}};
   nlohmann::json axes = nlohmann::json::array();
@@ -120,10 +129,8 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
                          {"objective_mse", tuning["objective_mse"]}, {"optimistic", tuning["optimistic"]},
                          {"seconds", calibration.axes[a].tuning_seconds}};
     }
-    for (const auto& warning : fit_warnings(axis, calibration.axes[a].in_sample)) warn(warning);
     if (axis.envelope) {
       entry["training_envelope"] = axis.envelope->to_json();
-      for (const auto& warning : axis.envelope->coverage_warnings()) warn(fmt::format("{}: {}", axis.name, warning));
     }
     if (!logs.empty() && axis.pipeline.smooth_seconds > 0) {
       add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
@@ -166,49 +173,53 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
 
 }  // namespace
 
-Command add_fit(CLI::App& parent) {
-  auto args = std::make_shared<FitArguments>();
-  CLI::App* app = parent.add_subcommand("fit", "fit one drift model per gyro axis");
-  args->data.add_to(*app);
-  app->add_option("--model", args->model, "linear, stepwise or svr")
+void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
+  args.data.add_to(app, data_required);
+  app.add_option("--model", args.model, "linear, stepwise or svr")
       ->check(CLI::IsMember({"linear", "stepwise", "svr"}));
-  app->add_option("--C", args->C, "SVR penalty C")->check(kModelScale);
-  app->add_option("--sigma", args->sigma, "RBF width σ, on standardized features")->check(kKernelWidth);
-  app->add_option("--gamma", args->gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(kModelScale);
-  app->add_option("--epsilon", args->epsilon, "SVR tube half-width, standardized target units (libsvm -p)")
+  app.add_option("--C", args.C, "SVR penalty C")->check(kModelScale);
+  app.add_option("--sigma", args.sigma, "RBF width σ, on standardized features")->check(kKernelWidth);
+  app.add_option("--gamma", args.gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(kModelScale);
+  app.add_option("--epsilon", args.epsilon, "SVR tube half-width, standardized target units (libsvm -p)")
       ->check(kNonNegative);
-  app->add_option("--tol", args->tolerance, "SVR stopping tolerance (libsvm -e)")->check(kPositive);
-  app->add_option("--rate-span", args->rate_span, "span of the dT/dt difference in seconds (default: --smooth)")
+  app.add_option("--tol", args.tolerance, "SVR stopping tolerance (libsvm -e)")->check(kPositive);
+  app.add_option("--rate-span", args.rate_span, "span of the dT/dt difference in seconds (default: --smooth)")
       ->check(kPositive);
-  app->add_option("--decimate", args->decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
+  app.add_option("--decimate", args.decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
       ->check(whole_number(1, 1000000000));
-  add_list_option(*app, "--features", args->features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md");
-  add_identify_option(*app, args->identify);
-  app->add_option("--node-channel", args->node_channel,
+  add_list_option(app, "--features", args.features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md");
+  add_identify_option(app, args.identify);
+  app.add_option("--node-channel", args.node_channel,
                   "with --features auto and one --temp column per axis: look for each axis' thermal node on its "
                   "own thermometer (own, default) or on any (any: another axis' may sit on its coil; measured "
                   "mixed, docs/features.md)")
       ->check(CLI::IsMember({"own", "any"}))
       ->option_text("own|any");
-  app->add_option("--tune", args->tune, "tune C and σ per axis: afsa (default for svr), grid or random")
+  app.add_option("--tune", args.tune, "tune C and σ per axis: afsa (default for svr), grid or random")
       ->check(CLI::IsMember({"afsa", "grid", "random"}));
-  app->add_option("--objective", args->objective,
+  app.add_option("--objective", args.objective,
                   "tuning objective: cv (blocked k-fold, default), holdout (last 30 %), train (in-sample, optimistic)")
       ->check(CLI::IsMember({"cv", "holdout", "train"}));
-  app->add_option("--evaluations", args->evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(kEvaluations);
-  app->add_option("--folds", args->folds, "folds of the blocked cross-validation, 2 to 100 (default 5)")->check(whole_number(2, 100));
-  app->add_option("--folds-by", args->folds_by,
+  app.add_option("--evaluations", args.evaluations, "tuning budget per axis (default 49, a 7x7 grid's worth)")->check(kEvaluations);
+  app.add_option("--folds", args.folds, "folds of the blocked cross-validation, 2 to 100 (default 5)")->check(whole_number(2, 100));
+  app.add_option("--folds-by", args.folds_by,
                   "cross-validation folds of tuning and --features auto: time (default; --folds blocks in time, "
                   "over several --data files in order) or runs (with two or more --data files, one fold per "
                   "file: leave-one-run-out)")
       ->check(CLI::IsMember({"runs", "time"}));
-  app->add_flag("--tune-epsilon", args->tune_epsilon, "tune ε as well");
-  app->add_option("--max-vectors", args->max_vectors,
+  app.add_flag("--tune-epsilon", args.tune_epsilon, "tune ε as well");
+  app.add_option("--max-vectors", args.max_vectors,
                   "at most K support vectors per axis: the reduced set fitted to the SVR (as compress does)")
       ->check(whole_number(1, std::size_t{1} << 20));
-  app->add_option("--seed", args->seed, "seed of the tuner's random choices")->check(kSeed);
-  app->add_option("--threads", args->threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")
+  app.add_option("--seed", args.seed, "seed of the tuner's random choices")->check(kSeed);
+  app.add_option("--threads", args.threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")
       ->check(kThreads);
+}
+
+Command add_fit(CLI::App& parent) {
+  auto args = std::make_shared<FitArguments>();
+  CLI::App* app = parent.add_subcommand("fit", "fit one drift model per gyro axis");
+  add_fit_options(*app, *args);
   app->add_option("--out", args->out, "model file to write")->required();
   app->add_flag("--json", args->json, "print one JSON object on stdout");
   return {app, [args, app] { return run_fit(*args, *app); }};

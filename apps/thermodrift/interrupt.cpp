@@ -30,6 +30,8 @@ void install_interrupt_handler() {
 
 StopToken interrupt_token() { return StopToken(interrupted); }
 
+void set_interrupted(bool value) { interrupted.store(value); }
+
 int interrupted_exit_status() {
   const int signal_number = received_signal.load();
   return signal_number > 0 ? 128 + signal_number : static_cast<int>(ExitStatus::interrupted);

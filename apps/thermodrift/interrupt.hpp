@@ -9,8 +9,11 @@
 namespace thermodrift::cli {
 
 void install_interrupt_handler();
-// The token of the flag the handler sets; a default token before install_interrupt_handler.
+// The token of the flag the handler sets (or set_interrupted).
 StopToken interrupt_token();
+// Sets or clears that flag without a signal: an embedding (the Python package) that runs
+// a command and catches Ctrl-C itself.
+void set_interrupted(bool interrupted);
 // The exit status of a command stopped by Interrupted: 128 + the signal received, 130
 // when the stop came from elsewhere (a callback).
 int interrupted_exit_status();

@@ -60,7 +60,7 @@ int run_report(const ReportArguments& args) {
   if (args.data.files.size() != 1) throw UsageError("report reads one log (--data FILE)");
   check_output_folder(args.out);  // before the log is read and the study run; write_report stages it
   const LogSpec spec = args.data.spec();
-  const ChamberLog log = args.data.read(spec, args.data.warm_up_seconds()).front();
+  const ChamberLog log = args.data.read(spec, args.data.warm_up_seconds(), interrupt_token()).front();
   ReportOptions options =
       paper_report_options(args.seed, args.threads, args.evaluations, args.identify, args.features, interrupt_token());
   options.out_dir = args.out;
