@@ -38,7 +38,7 @@ double seconds_since(Clock::time_point start) {
 
 // One model per axis on a 1 Hz cycle: the paper's pipeline, linear or ε-SVR with fixed
 // C = 10, γ = 0.5, ε = 0.05 (standardized units), as the export test fits them.
-DriftModel fit(const ChamberLog& log, const std::string& kind) {
+DriftModel fit(const ChamberLog& log, ModelKind kind) {
   DriftModel model;
   model.time_column = "time_s";
   for (std::size_t a = 0; a < log.axes(); ++a) {
@@ -50,7 +50,7 @@ DriftModel fit(const ChamberLog& log, const std::string& kind) {
     axis.pipeline.reference_temperature = 20;
     axis.kind = kind;
     const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
-    if (kind == "linear") {
+    if (kind == ModelKind::linear) {
       axis.model = fit_least_squares(table.features, table.target, linear_regressors(2));
     } else {
       SvrModel svr;
@@ -134,8 +134,8 @@ int main(int argc, char** argv) {
   training.cycles = 1;
   training.rate_hz = 1.0;
   const ChamberLog training_log = sim::to_chamber_log(sim::simulate(training));
-  const DriftModel svr_model = fit(training_log, "svr");
-  const DriftModel linear_model = fit(training_log, "linear");
+  const DriftModel svr_model = fit(training_log, ModelKind::svr);
+  const DriftModel linear_model = fit(training_log, ModelKind::linear);
   // The same SVR as a reduced set of 32 vectors per axis (thermodrift compress --max-vectors 32).
   DriftModel compressed_model = svr_model;
   std::vector<double> compression_rms;

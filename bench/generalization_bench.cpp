@@ -320,9 +320,9 @@ sim::ProfileKind second_training_profile(std::uint64_t law_seed) {
 // with one tuning thread so that a law's cost is one thread's.
 CalibrationOptions fit_options(Method method, long evaluations) {
   CalibrationOptions options;
-  options.model = model_name(method);
+  options.model = model_kind(method);
   options.terms = method == Method::paper ? std::vector<std::string>{"dT", "rate"} : std::vector<std::string>{"auto"};
-  if (options.model == "svr") {
+  if (options.model == ModelKind::svr) {
     options.svr.C = 100.0;
     options.svr.gamma = gamma_of_sigma(1.0);
     options.svr.epsilon = 0.01;

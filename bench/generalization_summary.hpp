@@ -16,6 +16,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "thermodrift/models/model_kind.hpp"
+
 namespace thermodrift::bench {
 
 enum class Method {
@@ -45,7 +47,15 @@ inline Method parse_method(const std::string& name) {
 }
 
 // The calibrate model of a method.
-inline std::string model_name(Method method) { return method == Method::paper ? "svr" : to_string(method); }
+// The model kind a method fits (the oracle: least squares, as linear).
+inline thermodrift::ModelKind model_kind(Method method) {
+  switch (method) {
+    case Method::paper:
+    case Method::svr: return thermodrift::ModelKind::svr;
+    case Method::stepwise: return thermodrift::ModelKind::stepwise;
+    default: return thermodrift::ModelKind::linear;
+  }
+}
 
 inline std::string method_list(const std::vector<Method>& methods) {
   std::string list;

@@ -106,7 +106,7 @@ struct Fixture {
       simulation.cycles = 1;
       Fixture f;
       f.log = thermodrift::sim::to_chamber_log(thermodrift::sim::simulate(simulation));
-      auto fit = [&](const std::string& model, std::vector<std::string> terms) {
+      auto fit = [&](thermodrift::ModelKind model, std::vector<std::string> terms) {
         thermodrift::CalibrationOptions options;
         options.model = model;
         options.terms = std::move(terms);
@@ -115,10 +115,10 @@ struct Fixture {
         options.svr.epsilon = 0.05;
         return thermodrift::calibrate({f.log}, {}, options).model;
       };
-      f.models["paper_linear"] = fit("linear", {"dT", "rate"});
-      f.models["node_linear"] = fit("linear", {"lag:600", "hinge:600:-20", "hinge:600:0", "hinge:600:20", "lagrate:600",
+      f.models["paper_linear"] = fit(thermodrift::ModelKind::linear, {"dT", "rate"});
+      f.models["node_linear"] = fit(thermodrift::ModelKind::linear, {"lag:600", "hinge:600:-20", "hinge:600:0", "hinge:600:20", "lagrate:600",
                                                "rate", "play:600:1", "dir:900:600", "gradrate:600:120"});
-      f.models["paper_svr"] = fit("svr", {"dT", "rate"});
+      f.models["paper_svr"] = fit(thermodrift::ModelKind::svr, {"dT", "rate"});
       return f;
     }();
     return fixture;

@@ -207,10 +207,11 @@ std::vector<ChamberLog> to_logs(const py::list& frames) {
   return logs;
 }
 
-py::array_t<double> to_array(const std::vector<double>& values) {
-  py::array_t<double> out(static_cast<py::ssize_t>(values.size()));
-  std::copy(values.begin(), values.end(), out.mutable_data());
-  return out;
+// A NumPy array that takes over `values`' buffer (no copy); the array owns it.
+py::array_t<double> to_array(std::vector<double>&& values) {
+  auto* owned = new std::vector<double>(std::move(values));
+  const py::capsule release(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array_t<double>(static_cast<py::ssize_t>(owned->size()), owned->data(), release);
 }
 
 py::object json_to_python(const nlohmann::json& json) {
@@ -228,16 +229,15 @@ py::dict read_log(const std::vector<std::string>& arguments) {
   });
   py::dict out;
   out["source"] = log.source;
-  out["time"] = to_array(log.time);
+  out["time"] = to_array(std::move(log.time));
   out["time_origin"] = log.time_origin ? py::object(py::str(log.time_origin->text)) : py::object(py::none());
   out["gyro_names"] = log.gyro_names;
   py::list gyro, temperature;
-  for (const auto& column : log.gyro) gyro.append(to_array(column));
-  for (const auto& column : log.temperature) temperature.append(to_array(column));
+  for (auto& column : log.gyro) gyro.append(to_array(std::move(column)));
+  for (auto& column : log.temperature) temperature.append(to_array(std::move(column)));
   out["gyro"] = gyro;
   out["temperature_names"] = log.temperature_names;
   out["temperature"] = temperature;
-  out["line"] = log.line;
   return out;
 }
 
@@ -459,7 +459,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("params", per_axis([](const AxisModel& axis) {
                                return json_to_python(axis.fit.value("params", nlohmann::json::object()));
                              }))
-      .def_property_readonly("kinds", per_axis([](const AxisModel& axis) { return axis.kind; }))
+      .def_property_readonly("kinds", per_axis([](const AxisModel& axis) { return std::string(to_string(axis.kind)); }))
       .def_property_readonly("gyro_columns", per_axis([](const AxisModel& axis) { return axis.gyro_column; }))
       .def_property_readonly("temperature_columns",
                              [](const Model& self) {
@@ -493,7 +493,7 @@ PYBIND11_MODULE(_core, m) {
           deviation.push_back(point.deviation);
           terms.push_back(point.terms);
         }
-        return py::make_tuple(to_array(tau), to_array(deviation), terms);
+        return py::make_tuple(to_array(std::move(tau)), to_array(std::move(deviation)), terms);
       },
       "overlapping Allan deviation (report/allan.hpp)");
   m.def("keywords", &keywords, "the keywords of fit or read_log (their options' long names)");

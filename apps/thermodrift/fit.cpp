@@ -31,7 +31,7 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
     throw UsageError("--node-channel applies to --features auto with the thermal-node identification");
   }
   FitRequest request;  // the library holds the defaults and the rule of when to tune
-  request.model = args.model;
+  request.model = *model_kind_named(args.model);  // --model accepts the kinds' names only
   request.smooth_seconds = args.data.smooth;
   if (args.rate_span > 0) request.rate_span_seconds = args.rate_span;
   if (args.decimate > 0) request.decimation = args.decimate;

@@ -110,7 +110,7 @@ std::string ModelSize::table() const {
   std::string out = fmt::format("{:<12} {:<9} {:>8} {:>10} {:>15} {:>11}\n", "axis", "model",
                                 "SV/terms", "constants", "flops/sample", "exp/sample");
   for (const auto& axis : axes) {
-    const std::size_t count = axis.kind == "svr" ? axis.support_vectors : axis.regressors;
+    const std::size_t count = axis.kind == ModelKind::svr ? axis.support_vectors : axis.regressors;
     out += fmt::format("{:<12} {:<9} {:>8} {:>8} B {:>15} {:>11}\n", axis.name, axis.kind, count,
                        axis.constant_bytes, axis.flops_per_sample, axis.exp_per_sample);
   }

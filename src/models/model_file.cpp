@@ -127,7 +127,7 @@ nlohmann::json to_json(const DriftModel& model) {
                             {"gyro_column", axis.gyro_column},
                             {"temperature_column", axis.temperature_column},
                             {"pipeline", axis.pipeline.to_json()},
-                            {"kind", axis.kind},
+                            {"kind", to_string(axis.kind)},
                             {"model", body},
                             {"fit", axis.fit}};
     if (axis.envelope) entry["training_envelope"] = axis.envelope->to_json();
@@ -223,18 +223,19 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
         axis.gyro_column = entry.at("gyro_column").get<std::string>();
         axis.temperature_column = entry.at("temperature_column").get<std::string>();
         axis.pipeline = Pipeline::from_json(entry.at("pipeline"));
-        axis.kind = entry.at("kind").get<std::string>();
+        const auto kind_name = entry.at("kind").get<std::string>();
+        const auto kind = model_kind_named(kind_name);
+        if (!kind) throw Error(fmt::format("unknown model kind '{}'", excerpt(kind_name)));
+        axis.kind = *kind;
         const auto terms = axis.pipeline.term_names();
-        if (axis.kind == "linear" || axis.kind == "stepwise") {
+        if (is_least_squares(axis.kind)) {
           auto linear = LinearModel::from_json(entry.at("model"), terms);
           if (!std::isfinite(linear.intercept) || !linear.coefficients.allFinite()) {
             throw Error("non-finite coefficient");
           }
           axis.model = std::move(linear);
-        } else if (axis.kind == "svr") {
-          axis.model = SvrModel::from_json(entry.at("model"), terms);
         } else {
-          throw Error(fmt::format("unknown model kind '{}'", axis.kind));
+          axis.model = SvrModel::from_json(entry.at("model"), terms);
         }
         axis.fit = entry.value("fit", nlohmann::json::object());
         if (entry.contains("training_envelope")) {

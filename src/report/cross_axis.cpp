@@ -30,7 +30,7 @@ std::vector<CrossAxisResult> run_cross_axis(const ChamberLog& training, const Ch
     // The same hyper-parameters as the left-out axis's own SVR (tuned or fixed), used as
     // they are, not tuned again: the only difference from self-regression is the data.
     CalibrationOptions svr_options = options;
-    svr_options.model = "svr";
+    svr_options.model = ModelKind::svr;
     if (const auto* own = std::get_if<SvrModel>(&fitted.axes[left_out].model)) {
       svr_options.svr.C = own->C;
       svr_options.svr.gamma = own->function.gamma;
@@ -46,7 +46,7 @@ std::vector<CrossAxisResult> run_cross_axis(const ChamberLog& training, const Ch
     const auto& pipeline = fitted.axes[left_out].pipeline;
     FittedModel model = fit_model(pooled.features, pooled.target, pipeline.term_names(), svr_options, true);
     result.model = fitted.axes[left_out];
-    result.model.kind = "svr";
+    result.model.kind = ModelKind::svr;
     result.model.model = std::move(model.model);
     result.model.fit = std::move(model.fit);
     result.training_samples = pooled.rows();

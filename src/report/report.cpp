@@ -38,9 +38,9 @@ std::string model_label(const ModelStudy& m, std::size_t axis) {
 }
 
 std::string model_kind_label(const ModelStudy& m, std::size_t axis) {
-  if (m.model == "linear") return "linear regression";
-  if (m.model == "stepwise") return "stepwise regression";
-  if (m.model == "svr") {
+  if (m.model == ModelKind::linear) return "linear regression";
+  if (m.model == ModelKind::stepwise) return "stepwise regression";
+  {
     const auto& fit = m.calibration.model.axes.at(axis).fit;
     if (fit.contains("tuning") && fit["tuning"].contains("method") && fit["tuning"]["method"].is_string()) {
       const std::string method = fit["tuning"]["method"].get<std::string>();
@@ -48,7 +48,6 @@ std::string model_kind_label(const ModelStudy& m, std::size_t axis) {
     }
     return fit.contains("history") ? "SVR + AFSA" : "SVR (fixed C, σ)";
   }
-  return m.model;
 }
 
 // The tuning histories an SVR fit carries, if any: a top-level "history" (AFSA, or the
@@ -165,7 +164,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   const bool known_drift = options.true_drift.size() == axes && axes > 0;
   std::size_t svr_index = study.models.size();
   for (std::size_t m = 0; m < study.models.size(); ++m) {
-    if (study.models[m].model == "svr" && svr_index == study.models.size()) svr_index = m;  // the paper's pair
+    if (study.models[m].model == ModelKind::svr && svr_index == study.models.size()) svr_index = m;  // the paper's pair
   }
 
   // Cross-axis experiment with the SVR's options.
@@ -232,7 +231,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   }
   stop.throw_if_requested("report");
   for (const auto& m : study.models) {
-    save_drift_model(m.calibration.model, (fs::path(out_dir) / ("model_" + m.model + ".json")).string());
+    save_drift_model(m.calibration.model, (fs::path(out_dir) / ("model_" + std::string(to_string(m.model)) + ".json")).string());
   }
   timings.emplace_back("compensation, Allan deviation, model files", seconds_since(start));
 
@@ -297,7 +296,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   }
   // Table 1's column order: original drift, SVR, linear, then stepwise.
   std::vector<std::size_t> order;
-  for (const char* kind : {"svr", "linear", "stepwise"}) {
+  for (ModelKind kind : {ModelKind::svr, ModelKind::linear, ModelKind::stepwise}) {
     for (std::size_t m = 0; m < study.models.size(); ++m) {
       if (study.models[m].model == kind) order.push_back(m);
     }
@@ -306,7 +305,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     if (std::find(order.begin(), order.end(), m) == order.end()) order.push_back(m);
   }
   nlohmann::json columns = nlohmann::json::array();
-  for (auto m : order) columns.push_back({{"model", study.models[m].model},
+  for (auto m : order) columns.push_back({{"model", to_string(study.models[m].model)},
                                        {"features", study.models[m].features},
                                        {"label", model_label(study.models[m], 0)}});
   nlohmann::json tables;
@@ -323,7 +322,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
       for (auto m : order) {
         const auto& metrics = is_held_out ? study.models[m].held_out[a] : study.models[m].in_sample[a];
         nlohmann::json cell = metrics_cell(metrics, floors[a]);
-        cell["model"] = study.models[m].model;
+        cell["model"] = to_string(study.models[m].model);
         cell["features"] = study.models[m].features;
         cell["terms"] = study.models[m].calibration.model.axes[a].pipeline.term_names();
         // Beside the held-out figure, what the training part's blocked CV expected of it.

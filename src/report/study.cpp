@@ -23,7 +23,7 @@ nlohmann::json Study::to_json() const {
                       {"held_out", m.held_out[a].to_json()},
                       {"fit", axis.fit}});
     }
-    models_json.push_back({{"model", m.model}, {"features", m.features}, {"seconds", m.seconds}, {"axes", axes}});
+    models_json.push_back({{"model", to_string(m.model)}, {"features", m.features}, {"seconds", m.seconds}, {"axes", axes}});
   }
   return {{"split", {{"row", split_row}, {"time_s", split_time}, {"description", split_description}}},
           {"models", models_json}};

@@ -264,7 +264,7 @@ CalibrationOptions calibration_options(const FitRequest& request) {
   options.selection.threads = threads;
   options.folds_by = request.folds_by;
   options.stop = request.stop;
-  if (request.model != "svr") return options;
+  if (request.model != ModelKind::svr) return options;
   if (request.sigma && request.gamma) throw UsageError("give --sigma or --gamma, not both (gamma = 1/(2 sigma²))");
   options.svr.C = request.C.value_or(100.0);
   options.svr.gamma = request.gamma ? *request.gamma : gamma_of_sigma(request.sigma.value_or(1.0));
@@ -295,9 +295,12 @@ bool chooses_features(const CalibrationOptions& options) {
   return options.terms.size() == 1 && options.terms.front() == "auto";
 }
 
-std::size_t minimum_samples(const std::string& model, std::size_t terms) {
-  if (model == "linear") return terms + 2;
-  if (model == "stepwise") return 2 * terms + 4;
+std::size_t minimum_samples(ModelKind model, std::size_t terms) {
+  switch (model) {
+    case ModelKind::linear: return terms + 2;
+    case ModelKind::stepwise: return 2 * terms + 4;
+    case ModelKind::svr: return 3;
+  }
   return 3;
 }
 
@@ -306,10 +309,10 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                       bool standardize, std::size_t axis, const LinearModel* linear_fit) {
   FittedModel fitted;
   fitted.fit = {{"terms", terms}};
-  if (linear_fit && options.model != "stepwise") fitted.fit["averaged_linear_part"] = true;
-  if (options.model == "linear") {
+  if (linear_fit && options.model != ModelKind::stepwise) fitted.fit["averaged_linear_part"] = true;
+  if (options.model == ModelKind::linear) {
     fitted.model = linear_fit ? *linear_fit : fit_least_squares(features, target, linear_regressors(terms.size()));
-  } else if (options.model == "stepwise") {
+  } else if (options.model == ModelKind::stepwise) {
     auto stepwise = fit_stepwise(features, target,
                                  options.partially_linear ? linear_regressors(terms.size())
                                                           : quadratic_regressors(terms.size()),
@@ -320,7 +323,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     }
     fitted.fit["stepwise_path"] = path;
     fitted.model = std::move(stepwise.model);
-  } else if (options.model == "svr") {
+  } else if (options.model == ModelKind::svr) {
     SvrModel svr;
     Eigen::VectorXd kernel_target = target;
     if (options.partially_linear) {
@@ -398,8 +401,6 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                             {"dual_objective", result.summary.dual_objective}};
     fitted.fit["evaluations"] = evaluations;
     fitted.model = std::move(svr);
-  } else {
-    throw UsageError(fmt::format("unknown model '{}' (expected linear, stepwise or svr)", options.model));
   }
   return fitted;
 }
@@ -409,7 +410,7 @@ Calibration calibrate_libsvm(const LabelledData& data, const std::string& source
   const auto start = std::chrono::steady_clock::now();
   const auto columns = static_cast<std::size_t>(data.samples.cols());
   if (static_cast<std::size_t>(data.samples.rows()) < minimum_samples(options.model, columns)) {
-    throw DataError(source, 0, 0, fmt::format("{} samples are too few for a {} model", data.samples.rows(), options.model));
+    throw DataError(source, 0, 0, fmt::format("{} samples are too few for a {} model", data.samples.rows(), to_string(options.model)));
   }
   AxisModel axis;
   axis.name = "label";
@@ -499,7 +500,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     if (chooses_features(options)) {
       const FeatureSelectionOptions& selection_options = options.selection;
       FeatureSelection selection = axis < searched.size() ? searched[axis] : search_features(logs, axis, axis_model.pipeline, options);
-      if (options.model == "svr" && selection_options.method == FeatureSelectionOptions::Method::greedy) {
+      if (options.model == ModelKind::svr && selection_options.method == FeatureSelectionOptions::Method::greedy) {
         if (options.selection_progress) options.selection_progress(axis, "judging the chosen terms by SVR");
         SvrJudgeOptions judge;
         judge.tuning = options.tuning;

@@ -32,7 +32,7 @@ TEST(ThermalLagAcceptance, ChosenFeaturesBringSvrWithinThreeTimesTheNoiseFloor) 
   spec.temperature_columns = {"temp_x", "temp_y", "temp_z"};
 
   StudyOptions options;
-  options.models = {"linear", "svr"};
+  options.models = {ModelKind::linear, ModelKind::svr};
   options.split_row = run.cycle_start_rows().at(1);
   SvrTuningOptions tuning;  // AFSA, blocked 5-fold CV, the default box and budget
   tuning.threads = 2;
@@ -43,7 +43,7 @@ TEST(ThermalLagAcceptance, ChosenFeaturesBringSvrWithinThreeTimesTheNoiseFloor) 
 
   const auto find = [&](const std::string& model, const std::string& features) -> const ModelStudy& {
     for (const auto& m : study.models) {
-      if (m.model == model && m.features == features) return m;
+      if (to_string(m.model) == model && m.features == features) return m;
     }
     throw std::runtime_error("no " + model + " on " + features);
   };

@@ -45,7 +45,7 @@ double closed_form_mse(const Eigen::MatrixXd& features, const Eigen::VectorXd& t
 TEST(LinearAcceptance, InSampleResidualOnSimulatedDataMatchesClosedForm) {
   const std::vector<ChamberLog> logs = {simulated_cycle()};
   CalibrationOptions options;
-  options.model = "linear";
+  options.model = ModelKind::linear;
   options.decimation = 1;  // fit on every ready sample, so in-sample = the least-squares residual
   const Calibration calibration = calibrate(logs, simulated_spec(), options);
   ASSERT_EQ(calibration.axes.size(), 3u);
@@ -66,7 +66,7 @@ TEST(LinearAcceptance, InSampleResidualOnSimulatedDataMatchesClosedForm) {
 TEST(LinearAcceptance, DecimatedFitIsTheClosedFormOnTheKeptSamples) {
   const std::vector<ChamberLog> logs = {simulated_cycle()};
   CalibrationOptions options;
-  options.model = "linear";  // default decimation: every 10th ready sample
+  options.model = ModelKind::linear;  // default decimation: every 10th ready sample
   const Calibration calibration = calibrate(logs, simulated_spec(), options);
   for (std::size_t axis = 0; axis < 3; ++axis) {
     const auto& model = calibration.model.axes[axis];
@@ -98,7 +98,7 @@ TEST(Bmi270Acceptance, LinearFitOverBothLogsShowsTheBiasSlope) {
   const std::vector<ChamberLog> logs = {read_chamber_log(folder + "cold.csv", spec),
                                         read_chamber_log(folder + "hot.csv", spec)};
   CalibrationOptions options;
-  options.model = "linear";
+  options.model = ModelKind::linear;
   options.smooth_seconds = 1;
   const Calibration calibration = calibrate(logs, spec, options);
   ASSERT_EQ(calibration.model.axes.size(), 3u);

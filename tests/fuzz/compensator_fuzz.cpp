@@ -30,7 +30,7 @@ std::vector<DriftModel>& models() {
   return fitted;
 }
 
-DriftModel fit(const thermodrift::ChamberLog& log, const std::string& model, std::vector<std::string> terms) {
+DriftModel fit(const thermodrift::ChamberLog& log, thermodrift::ModelKind model, std::vector<std::string> terms) {
   thermodrift::CalibrationOptions options;
   options.model = model;
   options.terms = std::move(terms);
@@ -78,9 +78,9 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   simulation.cycles = 1;
   simulation.rate_hz = 0.2;  // a short log: start-up stays fast under the sanitizers
   const thermodrift::ChamberLog log = thermodrift::sim::to_chamber_log(thermodrift::sim::simulate(simulation));
-  models().push_back(fit(log, "linear", {"dT", "rate"}));
-  models().push_back(fit(log, "svr", {"dT", "rate"}));
-  models().push_back(fit(log, "linear",
+  models().push_back(fit(log, thermodrift::ModelKind::linear, {"dT", "rate"}));
+  models().push_back(fit(log, thermodrift::ModelKind::svr, {"dT", "rate"}));
+  models().push_back(fit(log, thermodrift::ModelKind::linear,
                          {"lag:600", "hinge:600:0", "lagrate:600", "rate", "play:600:1", "dir:900:600",
                           "gradrate:600:120", "dT^2"}));
   return 0;

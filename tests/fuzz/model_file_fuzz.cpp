@@ -22,7 +22,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const double drift = axis.predict(features);
       // Finite parameters can still overflow (exp of a huge gamma is 0, a huge coefficient
       // times a huge power is inf): only NaN from finite input would be a loader bug.
-      if (std::isnan(drift) && axis.kind != "svr") std::abort();
+      if (std::isnan(drift) && axis.kind != thermodrift::ModelKind::svr) std::abort();
     }
   } catch (const thermodrift::Error&) {
   }

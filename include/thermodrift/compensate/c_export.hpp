@@ -37,7 +37,7 @@ std::size_t history_ring_capacity(const Pipeline& pipeline, double max_rate_hz);
 struct ModelSize {
   struct Axis {
     std::string name;
-    std::string kind;                  // "linear", "stepwise" or "svr"
+    ModelKind kind = ModelKind::linear;
     std::size_t features = 0;          // pipeline terms (d)
     std::size_t support_vectors = 0;   // SVR only
     std::size_t regressors = 0;        // linear/stepwise only

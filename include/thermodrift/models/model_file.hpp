@@ -15,6 +15,7 @@
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/models/linear.hpp"
+#include "thermodrift/models/model_kind.hpp"
 #include "thermodrift/models/svr_model.hpp"
 
 namespace thermodrift {
@@ -24,7 +25,7 @@ struct AxisModel {
   std::string gyro_column;         // as named to the reader: header name or 1-based index
   std::string temperature_column;  // likewise
   Pipeline pipeline;
-  std::string kind;                // "linear", "stepwise" or "svr"
+  ModelKind kind = ModelKind::linear;
   std::variant<LinearModel, SvrModel> model;
   nlohmann::json fit;              // how it was fitted: parameters, metrics, timings (informational)
   // What the training logs covered (features/envelope.hpp); absent in files written

@@ -18,7 +18,7 @@
 namespace thermodrift {
 
 struct StudyOptions {
-  std::vector<std::string> models{"linear", "stepwise", "svr"};  // models compared
+  std::vector<ModelKind> models{ModelKind::linear, ModelKind::stepwise, ModelKind::svr};  // models compared
   CalibrationOptions calibration;           // shared settings; `model` is set per entry of `models`
   std::optional<std::size_t> split_row;     // first held-out row; default: the last 30 % of the log
   double holdout_fraction = 0.3;            // used when split_row is not given
@@ -30,7 +30,7 @@ struct StudyOptions {
 };
 
 struct ModelStudy {
-  std::string model;
+  ModelKind model = ModelKind::linear;
   std::string features = "dT,rate";        // the terms asked for, comma-separated ("auto": chosen per axis)
   Calibration calibration;                 // fitted on the training part
   std::vector<ResidualMetrics> in_sample;  // per axis, training part

@@ -21,7 +21,7 @@
 namespace thermodrift {
 
 struct CalibrationOptions {
-  std::string model = "linear";            // "linear", "stepwise" or "svr"
+  ModelKind model = ModelKind::linear;
   double smooth_seconds = 100;             // moving-average window (seed: 100 s)
   std::optional<double> rate_span_seconds; // dT/dt span; default: the smoothing window (at least 1 s)
   std::optional<std::size_t> decimation;   // default: about 10 samples per smoothing window
@@ -64,7 +64,7 @@ struct CalibrationOptions {
 // the solver's own values are the given ones, else C = 100 and σ = 1. Options of the SVR
 // given with another model are the front end's to refuse, in its user's words.
 struct FitRequest {
-  std::string model = "linear";
+  ModelKind model = ModelKind::linear;
   double smooth_seconds = 100;
   std::optional<double> rate_span_seconds;
   std::optional<std::size_t> decimation;
@@ -156,7 +156,7 @@ struct FittedModel {
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
                       bool standardize, std::size_t axis = 0, const LinearModel* linear_fit = nullptr);
-std::size_t minimum_samples(const std::string& model, std::size_t terms);
+std::size_t minimum_samples(ModelKind model, std::size_t terms);
 
 // libsvm-format data is used exactly as given: no smoothing, no pipeline, no scaling, so
 // the result compares number for number with libsvm's svm-train (one axis, "label").

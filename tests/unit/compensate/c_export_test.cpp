@@ -74,7 +74,7 @@ DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const st
       for (const auto& term : terms) axis.pipeline.terms.push_back(FeatureTerm::parse(term));
     }
     if (a < node_channels.size()) axis.pipeline.temperature_channel = node_channels[a];
-    axis.kind = kind;
+    axis.kind = *model_kind_named(kind);
     const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
     if (kind == "linear") {
       axis.model = fit_least_squares(table.features, table.target,
@@ -250,7 +250,7 @@ void expect_matches(const DriftModel& model, const ChamberLog& log, bool single_
   const double estimated = static_cast<double>(exported_state_bytes(model, options));
   EXPECT_NEAR(estimated / static_cast<double>(c.state_bytes), 1.0, 0.05) << c.state_bytes;
   std::printf("[ info ] %s %s: largest |C - C++| / drift scale (%.3g deg/h) = %.3g\n",
-              model.axes.front().kind.c_str(), single_precision ? "float" : "double", cpp.drift_scale,
+              std::string(to_string(model.axes.front().kind)).c_str(), single_precision ? "float" : "double", cpp.drift_scale,
               difference);
 }
 

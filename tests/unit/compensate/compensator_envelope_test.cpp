@@ -17,7 +17,7 @@ DriftModel one_axis_model(std::optional<TrainingEnvelope> envelope) {
   axis.pipeline.smooth_seconds = 10;
   axis.pipeline.rate_span_seconds = 10;
   axis.pipeline.reference_temperature = 25;
-  axis.kind = "linear";
+  axis.kind = ModelKind::linear;
   LinearModel linear;
   linear.regressors = linear_regressors(2);
   linear.coefficients = Eigen::Vector2d(0.5, 0.25);

@@ -33,7 +33,7 @@ DriftModel two_axis_model() {
     axis.pipeline.rate_span_seconds = 1;
     axis.pipeline.decimation = 5;
     axis.pipeline.reference_temperature = 31.0625 + a;
-    axis.kind = a == 0 ? "linear" : "stepwise";
+    axis.kind = a == 0 ? ModelKind::linear : ModelKind::stepwise;
     LinearModel linear;
     linear.regressors = a == 0 ? linear_regressors(2) : quadratic_regressors(2);
     linear.coefficients = Eigen::VectorXd::LinSpaced(static_cast<Eigen::Index>(linear.regressors.size()), -1.5, 2.25);

@@ -20,7 +20,7 @@ TEST(CrossAxis, FitsWithTheLeftOutAxisHyperParametersUntuned) {
   const ChamberLog held_out = slice_rows(log, split, log.rows());
   LogSpec spec;
   CalibrationOptions options;
-  options.model = "svr";
+  options.model = ModelKind::svr;
   SvrTuningOptions tuning;
   tuning.evaluations = 8;
   options.tuning = tuning;

@@ -32,7 +32,7 @@ class WriteReport : public ::testing::Test {
     sim::SimulatorOptions simulator;
     simulator.rate_hz = 0.1;
     log_ = sim::to_chamber_log(sim::simulate(simulator));
-    options_.study.models = {"linear", "stepwise"};  // no SVR: a quick study
+    options_.study.models = {ModelKind::linear, ModelKind::stepwise};  // no SVR: a quick study
     options_.gnuplot = "";                            // no figures
     options_.study.calibration.stop = StopToken(stop_);
   }

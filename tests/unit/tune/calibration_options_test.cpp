@@ -11,7 +11,7 @@ namespace {
 
 TEST(CalibrationOptions, TheSvrIsTunedUnlessCAndSigmaAreBothGiven) {
   FitRequest request;
-  request.model = "svr";
+  request.model = ModelKind::svr;
   request.seed = 7;
   request.threads = 3;
   const CalibrationOptions tuned = calibration_options(request);
@@ -38,7 +38,7 @@ TEST(CalibrationOptions, TheSvrIsTunedUnlessCAndSigmaAreBothGiven) {
 
 TEST(CalibrationOptions, SigmaAndGammaTogetherOrAnUnknownMethodAreUsageErrors) {
   FitRequest request;
-  request.model = "svr";
+  request.model = ModelKind::svr;
   request.sigma = 1;
   request.gamma = 0.5;
   EXPECT_THROW(calibration_options(request), UsageError);
@@ -49,7 +49,7 @@ TEST(CalibrationOptions, SigmaAndGammaTogetherOrAnUnknownMethodAreUsageErrors) {
 
 TEST(CalibrationOptions, OtherModelsAreNeverTuned) {
   FitRequest request;
-  request.model = "linear";
+  request.model = ModelKind::linear;
   request.decimation = 3;
   request.threads = 2;
   const CalibrationOptions options = calibration_options(request);

@@ -138,7 +138,7 @@ TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
   for (auto& column : first_cycle.temperature) column.resize(split);
 
   CalibrationOptions options;
-  options.model = "linear";
+  options.model = ModelKind::linear;
   options.terms = {"auto"};
   ASSERT_EQ(options.selection.method, FeatureSelectionOptions::Method::thermal_node) << "the default search";
   const Calibration calibration = calibrate({first_cycle}, LogSpec{}, options);
@@ -183,7 +183,7 @@ TEST(ThermalNode, FindsTheNodeOnAnotherAxisThermometer) {
   const ChamberLog first_cycle = slice_rows(log, 0, split);
 
   CalibrationOptions options;
-  options.model = "linear";
+  options.model = ModelKind::linear;
   options.terms = {"auto"};
   options.selection.other_channels = true;
   const Calibration calibration = calibrate({first_cycle}, LogSpec{}, options);
@@ -228,7 +228,7 @@ TEST(ThermalNode, BoundsHowMuchTheFitCancels) {
   double ratio[2] = {0, 0}, cancelled[2] = {0, 0};
   for (const bool bounded : {true, false}) {
     CalibrationOptions options;
-    options.model = "linear";
+    options.model = ModelKind::linear;
     options.terms = {"auto"};
     if (!bounded) options.selection.max_cancellation = std::numeric_limits<double>::infinity();
     // On y's own channel (the default): on z's, which sits on y's coil, the node is a plain
@@ -257,7 +257,7 @@ TEST(ThermalNode, StepwiseOnIdentifiedTermsOffersNoProducts) {
   const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 1), 4);
   const ChamberLog log = sim::to_chamber_log(run);
   CalibrationOptions options;
-  options.model = "stepwise";
+  options.model = ModelKind::stepwise;
   options.terms = {"lag:700", "hinge:700:-10", "hinge:700:10", "lagrate:700", "rate"};
   for (const bool identified : {true, false}) {
     options.partially_linear = identified;
