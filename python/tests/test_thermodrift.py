@@ -257,3 +257,30 @@ def test_the_python_example_writes_its_plots(tmp_path):
     for line in lines:
         before, after = (float(x) for x in line.split("MSE ")[1].split(" (°/h)")[0].split(" -> "))
         assert after < before, line
+
+
+def test_report_writes_what_the_cli_report_writes(logs, tmp_path):
+    train, _ = logs
+    options = dict(temp=TEMPS, evaluations=6, seed=2, threads=1)
+    page = td.report(train, tmp_path / "python", **options)
+    assert os.path.basename(page) == "report.html" and os.path.exists(page)
+    cli("report", "--data", train, "--temp", ",".join(TEMPS), "--evaluations", 6, "--seed", 2, "--threads", 1,
+        "--out", tmp_path / "cli")
+    with open(tmp_path / "python" / "summary.json") as a, open(tmp_path / "cli" / "summary.json") as b:
+        mine, theirs = json.load(a), json.load(b)
+    for summary in (mine, theirs):  # what may differ: timings, and the command line (its --out)
+        drop_keys(summary, lambda key: key.endswith("seconds") or key in ("command", "timings"))
+    assert mine == theirs
+    with pytest.raises(td.UsageError):
+        td.report(train, tmp_path / "bad", temp=TEMPS, holdout_fraction=0.3, split_time=100)
+
+
+def drop_keys(value, dropped):
+    if isinstance(value, dict):
+        for key in [k for k in value if dropped(k)]:
+            del value[key]
+        for item in value.values():
+            drop_keys(item, dropped)
+    elif isinstance(value, list):
+        for item in value:
+            drop_keys(item, dropped)
