@@ -258,13 +258,11 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
   }
   page << "</table>\n";
   for (const auto& axis : p["svr_per_axis"]) {
-    for (const char* key : {"tuning", "afsa", "objective", "method"}) {
-      if (!axis.contains(key)) continue;
-      nlohmann::json shown = axis[key];
-      if (shown.is_object()) shown.erase("history");
-      page << "<p>" << escape(axis["axis"].get<std::string>()) << ", " << key << ":</p><pre>" << escape(shown.dump(1))
-           << "</pre>\n";
-    }
+    if (!axis.contains("tuning")) continue;
+    nlohmann::json shown = axis["tuning"];
+    if (shown.is_object()) shown.erase("history");
+    page << "<p>" << escape(axis["axis"].get<std::string>()) << ", tuning:</p><pre>" << escape(shown.dump(1))
+         << "</pre>\n";
   }
 
   page << "<h2>Time taken</h2>\n<table><tr><th>step</th><th>seconds</th></tr>\n";

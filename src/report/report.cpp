@@ -40,18 +40,16 @@ std::string model_label(const ModelStudy& m, std::size_t axis) {
 std::string model_kind_label(const ModelStudy& m, std::size_t axis) {
   if (m.model == ModelKind::linear) return "linear regression";
   if (m.model == ModelKind::stepwise) return "stepwise regression";
-  {
-    const auto& fit = m.calibration.model.axes.at(axis).fit;
-    if (fit.contains("tuning") && fit["tuning"].contains("method") && fit["tuning"]["method"].is_string()) {
-      const std::string method = fit["tuning"]["method"].get<std::string>();
-      return "SVR + " + (method == "afsa" ? std::string("AFSA") : method);
-    }
-    return fit.contains("history") ? "SVR + AFSA" : "SVR (fixed C, σ)";
+  const auto& fit = m.calibration.model.axes.at(axis).fit;
+  if (fit.contains("tuning") && fit["tuning"].contains("method") && fit["tuning"]["method"].is_string()) {
+    const std::string method = fit["tuning"]["method"].get<std::string>();
+    return "SVR + " + (method == "afsa" ? std::string("AFSA") : method);
   }
+  return "SVR (fixed C, σ)";
 }
 
-// The tuning histories an SVR fit carries, if any: a top-level "history" (AFSA, or the
-// method "tuning"/"method" names), and any "grid_history" beside it.
+// The tuning history an SVR fit carries, if it was tuned: fit.tuning.history (calibrate's
+// record), labelled with fit.tuning.method.
 std::vector<TuningHistory> tuning_histories(const nlohmann::json& fit, const std::string& axis) {
   std::vector<TuningHistory> out;
   const auto read = [&](const nlohmann::json& history, const std::string& method) {
@@ -65,16 +63,12 @@ std::vector<TuningHistory> tuning_histories(const nlohmann::json& fit, const std
     }
     if (!h.points.empty()) out.push_back(std::move(h));
   };
-  std::string method = "AFSA";
   if (fit.contains("tuning") && fit["tuning"].is_object()) {
     const auto& tuning = fit["tuning"];
+    std::string method = "AFSA";
     if (tuning.contains("method") && tuning["method"].is_string()) method = tuning["method"].get<std::string>();
     if (tuning.contains("history")) read(tuning["history"], method);
-    if (tuning.contains("grid_history")) read(tuning["grid_history"], "grid");
   }
-  if (fit.contains("method") && fit["method"].is_string()) method = fit["method"].get<std::string>();
-  if (fit.contains("history")) read(fit["history"], method);
-  if (fit.contains("grid_history")) read(fit["grid_history"], "grid");
   return out;
 }
 
@@ -267,7 +261,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     for (const auto& axis : study.models[svr_index].calibration.model.axes) {
       nlohmann::json entry = {{"axis", axis.name}};
       if (axis.fit.contains("params")) entry["params"] = axis.fit["params"];
-      for (const char* key : {"evaluations", "tuning", "afsa", "objective", "method"}) {
+      for (const char* key : {"evaluations", "tuning"}) {
         if (axis.fit.contains(key)) entry[key] = axis.fit[key];
       }
       if (axis.fit.contains("solver")) entry["solver"] = axis.fit["solver"];
