@@ -56,7 +56,8 @@ void flush_warnings() {
   if (messages.empty()) return;
   const py::object warn = py::module_::import("warnings").attr("warn");
   const py::object category = py::module_::import("thermodrift.errors").attr("ThermodriftWarning");
-  for (const auto& message : messages) warn(message, category, 3);
+  // stacklevel 2: the caller of the package function (level 1 is the function itself).
+  for (const auto& message : messages) warn(message, category, 2);
 }
 
 // Runs `work(stop)` on a worker thread with the GIL released; Ctrl-C stops it through

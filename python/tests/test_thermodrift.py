@@ -164,8 +164,9 @@ def test_reader_warnings_are_python_warnings(tmp_path):
     log = tmp_path / "banner.csv"
     rows = "\n".join(f"{t},{0.1 + 0.001 * t},{20 + 0.01 * t}" for t in range(400))
     log.write_text("# chamber run 7, operator A\ntime,gyro_x,temp_x\n" + rows + "\n")
-    with pytest.warns(td.ThermodriftWarning, match="banner|skipped"):
+    with pytest.warns(td.ThermodriftWarning, match="banner|skipped") as record:
         frame = td.read_log(log)
+    assert record[0].filename == __file__  # the warning points at the caller's line
     assert len(frame) == 400
     assert list(frame.columns) == ["time", "gyro_x", "temp_x"]
 
