@@ -17,24 +17,41 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // kDirectionRateScale = 0.2): about a factor 3 either side of it.
 constexpr double kMemoryRateScales[] = {0, 0.07, 0.5};
 
+// The node's level and rate as terms: what the dynamic terms that read them are built on.
+struct NodeNames {
+  std::string level, rate;
+  double tau = 0;        // the node's whole lag (T1 + T2): what lag-reading terms take as their lag
+  double first_tau = 0;  // T1: the lag whose rate gives the direction of travel
+};
+
 // A term linear in the node's dynamics, added to the node's static map when it pays.
 struct DynamicTerm {
-  enum class Kind { gradient_rate, memory, second_lag, play, channel_gradient, channel_gradient_rate } kind;
+  enum class Kind {
+    gradient_rate, memory, second_lag, play, channel_gradient, channel_gradient_rate,
+    asymmetric_rate,  // the node's rate times the sign of its travel: heating and cooling rates weigh differently
+    rate_tempco       // the node's rate times its level: a rate sensitivity that changes with temperature
+  } kind;
   double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W
   double rate_scale = 0;  // R0 of a memory, °C/min (0: the default, kDirectionRateScale); not refined
   std::string channel_term{};  // grad:A-B or gradrate:A-B: a measured gradient, no constant of its own
 
   bool measured() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
+  // Terms without a constant of their own to refine.
+  bool fixed() const { return measured() || kind == Kind::asymmetric_rate || kind == Kind::rate_tempco; }
 
-  std::string name(double node_tau) const {
+  std::string name(const NodeNames& node) const {
     switch (kind) {
-      case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", node_tau, tau);
+      case Kind::gradient_rate: return fmt::format("gradrate:{}:{}", node.tau, tau);
       case Kind::memory:
-        return rate_scale > 0 ? fmt::format("dir:{}:{}:{}", tau, node_tau, rate_scale) : fmt::format("dir:{}:{}", tau, node_tau);
+        return rate_scale > 0 ? fmt::format("dir:{}:{}:{}", tau, node.tau, rate_scale) : fmt::format("dir:{}:{}", tau, node.tau);
       case Kind::second_lag: return fmt::format("lag:{}", tau);
-      case Kind::play: return fmt::format("play:{}:{}", node_tau, tau);
+      case Kind::play: return fmt::format("play:{}:{}", node.tau, tau);
       case Kind::channel_gradient:
       case Kind::channel_gradient_rate: return channel_term;
+      // The sign of travel is a fast memory (60 s) of the node's first lag's rate, saturated
+      // beyond 0.05 °C/min: the product is the rate's magnitude, smooth through zero.
+      case Kind::asymmetric_rate: return fmt::format("{}*dir:60:{}:0.05", node.rate, node.first_tau);
+      case Kind::rate_tempco: return fmt::format("{}*{}", node.level, node.rate);
     }
     return {};
   }
@@ -49,7 +66,9 @@ struct DynamicTerm {
       case Kind::second_lag: return 1200;
       case Kind::play: return 10;
       case Kind::channel_gradient:
-      case Kind::channel_gradient_rate: return 0;
+      case Kind::channel_gradient_rate:
+      case Kind::asymmetric_rate:
+      case Kind::rate_tempco: return 0;
     }
     return 0;
   }
@@ -79,13 +98,19 @@ struct NodeModel {
   std::vector<DynamicTerm> dynamics;
 
   bool plain() const { return tau2 == 0 && zero == 0; }
-  // Dynamic terms with states of their own (a measured gradient has none): at most
+  // Dynamic terms modelled on the node (a measured gradient is not): at most
   // max_dynamic_terms of them.
   std::size_t modelled_dynamics() const {
     return static_cast<std::size_t>(std::count_if(dynamics.begin(), dynamics.end(), [](const DynamicTerm& t) { return !t.measured(); }));
   }
   // The lag the dynamic terms read: the node's, or the sum of a series pair's.
   double dynamics_tau() const { return tau + tau2; }
+  // The node's level and rate as terms (a lead-lag node's: its lag's, which the lead shifts
+  // by a rate term the model already has).
+  NodeNames names() const {
+    return {tau2 > 0 ? fmt::format("lag2:{}:{}", tau, tau2) : fmt::format("lag:{}", tau),
+            tau2 > 0 ? fmt::format("lag2rate:{}:{}", tau, tau2) : fmt::format("lagrate:{}", tau), dynamics_tau(), tau};
+  }
 
   std::vector<std::string> terms() const {
     std::vector<std::string> out;
@@ -100,7 +125,7 @@ struct NodeModel {
       if (tau2 > 0) out.push_back(fmt::format("lag2rate:{}:{}", tau, tau2));
     }
     out.push_back("rate");
-    for (const auto& term : dynamics) out.push_back(term.name(dynamics_tau()));
+    for (const auto& term : dynamics) out.push_back(term.name(names()));
     return out;
   }
 
@@ -111,7 +136,7 @@ struct NodeModel {
     if (tau2 > 0) out.push_back({&tau2, 1, shortest, longest});
     if (zero > 0) out.push_back({&zero, 1, shortest, longest});
     for (auto& term : dynamics) {
-      if (term.measured()) continue;
+      if (term.fixed()) continue;
       out.push_back({&term.tau, term.resolution(), term.shortest(2 * shortest),
                      term.kind == DynamicTerm::Kind::play ? term.longest() : std::min(term.longest(), longest)});
     }
@@ -144,14 +169,17 @@ constexpr double kDistinctRatio = 1.5;
 bool distinct(const NodeModel& model) {
   for (std::size_t i = 0; i < model.dynamics.size(); ++i) {
     const auto& a = model.dynamics[i];
-    if (!a.measured() && a.tau > a.longest()) return false;
+    if (!a.fixed() && a.tau > a.longest()) return false;
     if (a.kind == DynamicTerm::Kind::second_lag &&
         std::max(a.tau, model.dynamics_tau()) < kDistinctRatio * std::min(a.tau, model.dynamics_tau())) {
       return false;
     }
     for (std::size_t j = i + 1; j < model.dynamics.size(); ++j) {
       const auto& b = model.dynamics[j];
-      if (a.kind == b.kind) return false;  // one Shupe term, one memory, one second node
+      if (a.kind != b.kind) continue;
+      // One Shupe term, one memory, one second node; plays twice when their widths are at
+      // least twice apart (a Preisach sum: hysteresis of several widths).
+      if (a.kind != DynamicTerm::Kind::play || std::max(a.tau, b.tau) < 2 * std::min(a.tau, b.tau)) return false;
     }
   }
   return true;
@@ -442,6 +470,8 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       candidates.push_back({DynamicTerm::Kind::memory, tau, memory_scale});
     }
     for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
+    candidates.push_back({DynamicTerm::Kind::asymmetric_rate});
+    candidates.push_back({DynamicTerm::Kind::rate_tempco});
     for (const auto& term : channel_candidate_terms(logs.front(), axis)) {
       const bool rate = term.rfind("gradrate:", 0) == 0;
       candidates.push_back({rate ? DynamicTerm::Kind::channel_gradient_rate : DynamicTerm::Kind::channel_gradient, 0, 0, term});
@@ -487,7 +517,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       if (!(chosen_cv < std::pow(keep, static_cast<double>(added)) * best_cv)) break;
       std::string names;
       for (std::size_t i = best.dynamics.size(); i < chosen.dynamics.size(); ++i) {
-        names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.dynamics_tau());
+        names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.names());
       }
       best = std::move(chosen), best_cv = chosen_cv;
       result.path.push_back({"add", names, best_cv, best.terms()});

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -127,23 +128,32 @@ bool check_average(const AxisModel& axis, const ChamberLog& training, std::size_
   return true;
 }
 
-TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
-  const sim::UnitLaw unit = known_unit();
-  const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 2), 4);
+// `--model linear --features auto` fitted on cycle 1 of a run, judged on cycle 2 with the
+// states carried over from cycle 1; the floor is the simulator's, of cycle 2's rows.
+struct NextCycleFit {
+  ChamberLog first_cycle;
+  Calibration calibration;
+  std::vector<ResidualMetrics> held_out;
+  std::array<double, 3> floor{};
+};
+
+NextCycleFit fit_first_cycle(const sim::ChamberRun& run) {
   const std::size_t split = run.cycle_start_rows().at(1);
   const ChamberLog log = sim::to_chamber_log(run);
-  ChamberLog first_cycle = log;
-  first_cycle.time.resize(split);
-  for (auto& column : first_cycle.gyro) column.resize(split);
-  for (auto& column : first_cycle.temperature) column.resize(split);
-
+  NextCycleFit fit{slice_rows(log, 0, split), {}, {}, run.noise_floor(100, split)};
   CalibrationOptions options;
   options.model = ModelKind::linear;
   options.terms = {"auto"};
-  ASSERT_EQ(options.selection.method, FeatureSelectionOptions::Method::thermal_node) << "the default search";
-  const Calibration calibration = calibrate({first_cycle}, LogSpec{}, options);
-  const auto held_out = evaluate_from(calibration.model, log, split);
-  const auto floor = run.noise_floor(100, split);
+  EXPECT_EQ(options.selection.method, FeatureSelectionOptions::Method::thermal_node) << "the default search";
+  fit.calibration = calibrate({fit.first_cycle}, LogSpec{}, options);
+  fit.held_out = evaluate_from(fit.calibration.model, log, split);
+  return fit;
+}
+
+TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
+  const sim::UnitLaw unit = known_unit();
+  const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 2), 4);
+  const auto [first_cycle, calibration, held_out, floor] = fit_first_cycle(run);
 
   const double true_delay[3] = {600, 1200, 500};
   int averaged = 0;
@@ -252,6 +262,58 @@ TEST(ThermalNode, BoundsHowMuchTheFitCancels) {
 
 // Stepwise on identified terms chooses among the terms themselves: no squares or products
 // of hinges, which extrapolate as parabolas. On other terms it still offers them.
+// A rate response that is not linear in the coil's rate: heating and cooling at the same
+// speed drift by different amounts (a·r·tanh(r/0.05), r the coil's rate in °C/min), and the
+// rate sensitivity changes with temperature (b·ΔTc·r). Added to x of the known unit, without
+// its memory, from the simulator's true coil states. The search offers both as products of
+// the node's own terms; it must take them, and the next cycle must hold the plain bound.
+TEST(ThermalNode, FindsAnAsymmetricAndATemperatureDependentRateResponse) {
+  sim::UnitLaw unit = known_unit();
+  unit.axes[0].hysteresis = sim::HysteresisKind::none;
+  const sim::Setpoint programme = sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 2);
+  sim::ChamberRun run = sim::simulate_unit(unit, programme, 4);
+  const sim::LawRegressors states = sim::law_regressors(unit, programme, run.rate_hz);
+  const auto names = sim::law_regressor_names();
+  const auto index = [&](std::string_view name) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  const std::vector<double>& coil = states[0][index("dTc")];
+  const std::vector<double>& coil_rate = states[0][index("coil_rate")];
+  std::vector<double>& gyro = run.columns[static_cast<std::size_t>(
+      std::find(run.column_names.begin(), run.column_names.end(), "gyro_x") - run.column_names.begin())];
+  std::vector<double>& drift = run.columns[static_cast<std::size_t>(
+      std::find(run.column_names.begin(), run.column_names.end(), "drift_x") - run.column_names.begin())];
+  ASSERT_EQ(coil_rate.size(), gyro.size());
+  double largest = 0;
+  for (std::size_t k = 0; k < gyro.size(); ++k) {
+    const double extra = 0.6 * coil_rate[k] * std::tanh(coil_rate[k] / 0.05) + 0.02 * coil[k] * coil_rate[k];
+    gyro[k] += extra, drift[k] += extra;
+    largest = std::max(largest, std::abs(extra));
+  }
+  ASSERT_GT(largest, 0.3) << "°/h: the added response matters against the floor";
+
+  const auto [first_cycle, calibration, held_out, floor] = fit_first_cycle(run);
+
+  const Pipeline& pipeline = calibration.model.axes[0].pipeline;
+  std::string terms;
+  bool asymmetric = false, tempco = false;
+  for (const auto& term : pipeline.terms) {
+    terms += term.name() + " ";
+    if (term.factors.size() != 2) continue;
+    const FeatureAtom::Kind first = term.factors[0].atom.kind, second = term.factors[1].atom.kind;
+    const bool rate = first == FeatureAtom::Kind::lag_rate || first == FeatureAtom::Kind::lag2_rate;
+    asymmetric = asymmetric || (rate && second == FeatureAtom::Kind::direction);
+    tempco = tempco || (first == FeatureAtom::Kind::lag || first == FeatureAtom::Kind::lag2) &&
+                           (second == FeatureAtom::Kind::lag_rate || second == FeatureAtom::Kind::lag2_rate);
+  }
+  SCOPED_TRACE("x: " + terms);
+  std::printf("x: held-out %.2f x floor; %s\n", held_out[0].mse_after / floor[0], terms.c_str());
+  EXPECT_TRUE(asymmetric) << "the node's rate times its direction of travel";
+  EXPECT_TRUE(tempco) << "the node's level times its rate";
+  EXPECT_NEAR(node_delay(pipeline), 600, 150);
+  EXPECT_LT(held_out[0].mse_after / floor[0], 3.0) << "held-out MSE over the noise floor, next cycle";
+}
+
 TEST(ThermalNode, StepwiseOnIdentifiedTermsOffersNoProducts) {
   const sim::UnitLaw unit = known_unit();
   const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 1), 4);
