@@ -301,13 +301,17 @@ TEST_F(CExport, ThermalLagTermsMatchCompensatorThroughAGap) {
   expect_matches(svr, cut, true, 1e-4);
 }
 
-// The series lags, the node with a zero (lag2, lag2rate, nodehinge) and the play, through a gap. In
+// The series lags, the node with a zero (lag2, lag2rate, nodehinge), the play (two widths)
+// and the node's rate responses the identification offers (its rate times its direction of
+// travel, its level times its rate), through a gap. In
 // float the node's lead multiplies the difference of two lag states by TL/T2 (7.5 here), and
 // with it their rounding, so float is held to 1e-3 of the drift scale, double to 1e-9.
 TEST_F(CExport, NodeTermsMatchCompensatorThroughAGap) {
   const std::vector<std::string> terms = {"lag2:420:120", "lag2rate:420:120", "lagrate:420", "nodehinge:420:120:0:3",
                                           "nodehinge:420:0:900:-4", "nodehinge:420:120:900:5^2*rate", "rate",
-                                          "play:420:1.5", "play:900:0.5*rate"};
+                                          "play:420:1.5", "play:900:0.5*rate", "play:420:4",
+                                          "lagrate:420*dir:60:420:0.05", "lag:420*lagrate:420",
+                                          "lag2rate:420:120*dir:60:420:0.05", "lag2:420:120*lag2rate:420:120"};
   const DriftModel linear = fitted_model(*log_, "linear", terms);
   const ChamberLog cut = without_rows(*log_, 5000, 5600);
   expect_matches(linear, cut, false, 1e-9);
