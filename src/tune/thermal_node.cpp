@@ -113,19 +113,15 @@ struct NodeModel {
   }
 
   std::vector<std::string> terms() const {
-    std::vector<std::string> out;
-    if (plain()) {
-      out.push_back(fmt::format("lag:{}", tau));
-      for (const double knot : knots) out.push_back(fmt::format("hinge:{}:{}", tau, knot));
-      out.push_back(fmt::format("lagrate:{}", tau));
-    } else {
-      out.push_back(tau2 > 0 ? fmt::format("lag2:{}:{}", tau, tau2) : fmt::format("lag:{}", tau));
-      for (const double knot : knots) out.push_back(fmt::format("nodehinge:{}:{}:{}:{}", tau, tau2, zero, knot));
-      out.push_back(fmt::format("lagrate:{}", tau));
-      if (tau2 > 0) out.push_back(fmt::format("lag2rate:{}:{}", tau, tau2));
+    const NodeNames node = names();
+    std::vector<std::string> out{node.level};
+    for (const double knot : knots) {
+      out.push_back(plain() ? fmt::format("hinge:{}:{}", tau, knot) : fmt::format("nodehinge:{}:{}:{}:{}", tau, tau2, zero, knot));
     }
+    out.push_back(fmt::format("lagrate:{}", tau));
+    if (tau2 > 0) out.push_back(node.rate);
     out.push_back("rate");
-    for (const auto& term : dynamics) out.push_back(term.name(names()));
+    for (const auto& term : dynamics) out.push_back(term.name(node));
     return out;
   }
 

@@ -13,6 +13,7 @@
 #include <optional>
 #include <utility>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -260,8 +261,6 @@ TEST(ThermalNode, BoundsHowMuchTheFitCancels) {
   EXPECT_LT(100 * ratio[0], ratio[1]) << "held-out MSE over the noise floor, next cycle settled 1800 s";
 }
 
-// Stepwise on identified terms chooses among the terms themselves: no squares or products
-// of hinges, which extrapolate as parabolas. On other terms it still offers them.
 // A rate response that is not linear in the coil's rate: heating and cooling at the same
 // speed drift by different amounts (a·r·tanh(r/0.05), r the coil's rate in °C/min), and the
 // rate sensitivity changes with temperature (b·ΔTc·r). Added to x of the known unit, without
@@ -279,10 +278,12 @@ TEST(ThermalNode, FindsAnAsymmetricAndATemperatureDependentRateResponse) {
   };
   const std::vector<double>& coil = states[0][index("dTc")];
   const std::vector<double>& coil_rate = states[0][index("coil_rate")];
-  std::vector<double>& gyro = run.columns[static_cast<std::size_t>(
-      std::find(run.column_names.begin(), run.column_names.end(), "gyro_x") - run.column_names.begin())];
-  std::vector<double>& drift = run.columns[static_cast<std::size_t>(
-      std::find(run.column_names.begin(), run.column_names.end(), "drift_x") - run.column_names.begin())];
+  const auto column = [&](std::string_view name) -> std::vector<double>& {
+    return run.columns.at(static_cast<std::size_t>(
+        std::find(run.column_names.begin(), run.column_names.end(), name) - run.column_names.begin()));
+  };
+  std::vector<double>& gyro = column("gyro_x");
+  std::vector<double>& drift = column("drift_x");
   ASSERT_EQ(coil_rate.size(), gyro.size());
   double largest = 0;
   for (std::size_t k = 0; k < gyro.size(); ++k) {
@@ -314,6 +315,8 @@ TEST(ThermalNode, FindsAnAsymmetricAndATemperatureDependentRateResponse) {
   EXPECT_LT(held_out[0].mse_after / floor[0], 3.0) << "held-out MSE over the noise floor, next cycle";
 }
 
+// Stepwise on identified terms chooses among the terms themselves: no squares or products
+// of hinges, which extrapolate as parabolas. On other terms it still offers them.
 TEST(ThermalNode, StepwiseOnIdentifiedTermsOffersNoProducts) {
   const sim::UnitLaw unit = known_unit();
   const sim::ChamberRun run = sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 3, 1), 4);
