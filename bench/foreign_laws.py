@@ -158,7 +158,11 @@ def describe(unit):
     lines = [f"foreign law {unit['seed']}: range {unit['min_c']:.0f}..{unit['max_c']:.0f} °C, housing τ "
              f"{unit['housing_tau']:.0f} s (+{unit['housing_heat']:.1f} °C), mount τ {unit['mount_tau']:.0f} s"]
     for a, axis in enumerate(unit["axes"]):
-        lines.append(f"  {AXES[a]}: link {axis['link_tau']:.0f} s, diffusion {axis['diffusion_tau']:.0f} s, sensor on "
+        # A ramp's steady lag of the coil's mean temperature behind the housing: the link's
+        # time constant plus the diffusion's share, (N - 1)(2N - 1) / (6 N²) of its τ (N shells).
+        delay = axis["link_tau"] + axis["diffusion_tau"] * (SHELLS - 1) * (2 * SHELLS - 1) / (6 * SHELLS ** 2)
+        lines.append(f"  {AXES[a]}: coil τ {axis['link_tau']:.0f} s through its link, diffusion "
+                     f"{axis['diffusion_tau']:.0f} s (mean delay {delay:.0f} s behind the housing), sensor on "
                      f"{axis['sensor_site']} ({axis['sensor_tau']:.0f} s); static {axis['static']}; rate "
                      f"{axis['rate']:.2f} (tempco {axis['rate_tempco']:.4f}, asym {axis['asymmetry']:.2f}); shupe "
                      f"{axis['shupe']:.2f}; gradient {axis['gradient']:.3f}; hysteresis {axis['hysteresis']}; turn-on "
@@ -260,9 +264,11 @@ def network(unit):
     for a, axis in enumerate(unit["axes"]):
         first = 2 + a * SHELLS
         tl, ts = axis["link_tau"], axis["diffusion_tau"] / SHELLS ** 2
-        # the outer shell exchanges with the housing; the housing is loaded by the coils
-        A[first, first] -= 1 / tl
-        A[first, H] += 1 / tl
+        # the outer shell exchanges with the housing through a link whose conductance makes
+        # tl the time constant of the whole coil (SHELLS shells of one unit of heat capacity
+        # each) behind it; the housing is loaded by the coils
+        A[first, first] -= SHELLS / tl
+        A[first, H] += SHELLS / tl
         load = unit["coil_load"] / 3
         A[H, H] -= load / th
         A[H, first] += load / th
@@ -273,7 +279,7 @@ def network(unit):
             A[q, q] -= 1 / ts
             A[q, p] += 1 / ts
         # a source in the inner shell that holds it coil_heat °C above the housing in a soak
-        c[first + SHELLS - 1] += axis["coil_heat"] / (tl + (SHELLS - 1) * ts)
+        c[first + SHELLS - 1] += axis["coil_heat"] / (tl / SHELLS + (SHELLS - 1) * ts)
     for a, axis in enumerate(unit["axes"]):
         s = 2 + 3 * SHELLS + a
         site = axis["sensor_site"]
