@@ -190,25 +190,25 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
     channel_means_[channel] = value.mean;
     channel_rates_[channel] = value.rate;
   }
-  terms_.push({own.mean - pipeline_->reference_temperature, own.rate, step_seconds, channel_means_, channel_rates_},
-              features_);
+  inputs_ = {own.mean - pipeline_->reference_temperature, own.rate, step_seconds, channel_means_, channel_rates_};
+  terms_.push(inputs_, features_);
   sample_.since_start = time - start_time_;
   sample_.ready = sample_.since_start >= pipeline_->warm_up_seconds();
   return sample_;
 }
 
-FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log,
-                                 std::size_t gyro_axis, std::size_t temperature_channel,
-                                 bool decimate) {
+namespace {
+
+// Streams one axis of a log through `pipeline`: visit(row, sample, stream, kept) for every
+// row, `kept` for the ready rows a (decimated) table keeps.
+template <class Visit>
+void stream_log(const Pipeline& pipeline, const ChamberLog& log, std::size_t gyro_axis, std::size_t temperature_channel,
+                bool decimate, Visit&& visit) {
   // Burst means are a burst period apart: steps up to two missed bursts join them.
   Pipeline joined = pipeline;
   if (log.bursts) joined.gap_seconds = std::max(pipeline.effective_gap_seconds(), log.bursts->gap_seconds());
   FeatureStream stream(joined);
   const std::size_t step = decimate ? pipeline.decimation : 1;
-  std::vector<double> flat;
-  std::vector<double> target;
-  FeatureTable table;
-  table.run_start = {0};
   std::size_t ready_count = 0;
   std::vector<double> channels(pipeline.channels().empty() ? 0 : log.temperature.size());
   const std::size_t node_channel = pipeline.temperature_input(temperature_channel);
@@ -219,25 +219,93 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
   for (std::size_t i = 0; i < log.rows(); ++i) {
     for (std::size_t c = 0; c < channels.size(); ++c) channels[c] = log.temperature[c][i];
     const auto& sample = stream.push(log.time[i], log.gyro[gyro_axis][i], log.temperature[node_channel][i], channels);
+    bool kept = false;
     if (!sample.ready) {
       ready_count = 0;  // decimation restarts with each warm-up
-      continue;
+    } else {
+      kept = ready_count++ % step == 0;
     }
-    if (ready_count++ % step != 0) continue;
-    flat.insert(flat.end(), sample.features.begin(), sample.features.end());
-    target.push_back(sample.smoothed_gyro);
-    table.time.push_back(log.time[i]);
-    table.since_start.push_back(sample.since_start);
-    table.temperature.push_back(sample.smoothed_temperature);
-    table.rate.push_back(sample.smoothed_rate);
-    table.row.push_back(i);
+    visit(i, sample, stream, kept);
   }
+}
+
+}  // namespace
+
+FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log,
+                                 std::size_t gyro_axis, std::size_t temperature_channel,
+                                 bool decimate) {
+  std::vector<double> flat;
+  std::vector<double> target;
+  FeatureTable table;
+  table.run_start = {0};
+  stream_log(pipeline, log, gyro_axis, temperature_channel, decimate,
+             [&](std::size_t i, const FeatureStream::Sample& sample, const FeatureStream&, bool kept) {
+               if (!kept) return;
+               flat.insert(flat.end(), sample.features.begin(), sample.features.end());
+               target.push_back(sample.smoothed_gyro);
+               table.time.push_back(log.time[i]);
+               table.since_start.push_back(sample.since_start);
+               table.temperature.push_back(sample.smoothed_temperature);
+               table.rate.push_back(sample.smoothed_rate);
+               table.row.push_back(i);
+             });
   const auto n = static_cast<Eigen::Index>(table.row.size());
   const auto d = static_cast<Eigen::Index>(pipeline.terms.size());
   table.features = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic,
                                                   Eigen::RowMajor>>(flat.data(), n, d);
   table.target = Eigen::Map<const Eigen::VectorXd>(target.data(), n);
   return table;
+}
+
+RecordedInputs record_inputs(const Pipeline& pipeline, const ChamberLog& log, std::size_t gyro_axis,
+                             std::size_t temperature_channel, bool decimate) {
+  RecordedInputs recorded;
+  recorded.channels = pipeline.channels();
+  recorded.width = recorded.channels.empty() ? 0 : recorded.channels.back() + 1;
+  recorded.delta_t.reserve(log.rows());
+  recorded.rate.reserve(log.rows());
+  recorded.step_seconds.reserve(log.rows());
+  recorded.channel_means.reserve(log.rows() * recorded.width);
+  recorded.channel_rates.reserve(log.rows() * recorded.width);
+  stream_log(pipeline, log, gyro_axis, temperature_channel, decimate,
+             [&](std::size_t i, const FeatureStream::Sample&, const FeatureStream& stream, bool kept) {
+               const TermInputs& in = stream.inputs();
+               recorded.delta_t.push_back(in.delta_t);
+               recorded.rate.push_back(in.rate);
+               recorded.step_seconds.push_back(in.step_seconds);
+               recorded.channel_means.insert(recorded.channel_means.end(), in.channel_means.begin(), in.channel_means.end());
+               recorded.channel_rates.insert(recorded.channel_rates.end(), in.channel_rates.begin(), in.channel_rates.end());
+               if (kept) recorded.kept.push_back(i);
+             });
+  return recorded;
+}
+
+Eigen::MatrixXd evaluate_terms(const std::vector<FeatureTerm>& terms, const RecordedInputs& inputs) {
+  for (const auto& term : terms) {
+    for (const std::size_t channel : term.channels()) {
+      if (!std::binary_search(inputs.channels.begin(), inputs.channels.end(), channel)) {
+        throw UsageError(fmt::format("feature term '{}' reads temperature channel {}, which was not recorded",
+                                     term.name(), channel + 1));
+      }
+    }
+  }
+  TermEvaluator evaluator(terms);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> out(
+      static_cast<Eigen::Index>(inputs.kept.size()), static_cast<Eigen::Index>(terms.size()));
+  std::vector<double> values(terms.size());
+  std::size_t next = 0;
+  const std::size_t width = inputs.width;
+  for (std::size_t i = 0; i < inputs.rows() && next < inputs.kept.size(); ++i) {
+    const TermInputs in{inputs.delta_t[i], inputs.rate[i], inputs.step_seconds[i],
+                        std::span<const double>(inputs.channel_means).subspan(i * width, width),
+                        std::span<const double>(inputs.channel_rates).subspan(i * width, width)};
+    evaluator.push(in, values);
+    if (inputs.kept[next] == i) {
+      for (std::size_t j = 0; j < terms.size(); ++j) out(static_cast<Eigen::Index>(next), static_cast<Eigen::Index>(j)) = values[j];
+      ++next;
+    }
+  }
+  return out;
 }
 
 void append_rows(FeatureTable& table, const FeatureTable& more) {

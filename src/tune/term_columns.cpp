@@ -4,10 +4,52 @@
 
 #include <limits>
 
+#include <fmt/format.h>
+
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
+
+ColumnCache::ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline) {
+  Pipeline recording = pipeline;
+  recording.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
+  const FeatureTable table = feature_table(logs, recording, axis, true);
+  target_ = table.target;
+  run_start_ = table.run_start;
+  // A term reading each other channel, so that every channel's smoothed value and rate is
+  // recorded for the grad terms the searches offer.
+  const std::size_t channels = logs.empty() ? 0 : logs.front().temperature.size();
+  for (std::size_t c = 1; c < channels; ++c) recording.terms.push_back(FeatureTerm::parse(fmt::format("grad:{}-1", c + 1)));
+  for (const auto& log : logs) {
+    inputs_.push_back(record_inputs(recording, log, axis, temperature_channel_per_axis(log).at(axis), true));
+  }
+}
+
+void ColumnCache::ensure(const std::vector<std::string>& names) {
+  std::vector<FeatureTerm> missing;
+  for (const auto& name : names) {
+    if (!columns_.count(name)) missing.push_back(FeatureTerm::parse(name));
+  }
+  if (missing.empty()) return;
+  const std::size_t column_bytes = static_cast<std::size_t>(target_.size()) * sizeof(double);
+  if ((columns_.size() + missing.size()) * column_bytes > kBudgetBytes) {
+    std::erase_if(columns_, [&](const auto& entry) {
+      return std::find(names.begin(), names.end(), entry.first) == names.end();
+    });
+  }
+  std::vector<Eigen::MatrixXd> parts;
+  for (const auto& log : inputs_) parts.push_back(evaluate_terms(missing, log));
+  for (std::size_t j = 0; j < missing.size(); ++j) {
+    Eigen::VectorXd& column = columns_[missing[j].name()];
+    column.resize(target_.size());
+    Eigen::Index row = 0;
+    for (const auto& part : parts) {
+      column.segment(row, part.rows()) = part.col(static_cast<Eigen::Index>(j));
+      row += part.rows();
+    }
+  }
+}
 
 namespace {
 

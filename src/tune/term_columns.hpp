@@ -17,17 +17,11 @@
 namespace thermodrift {
 
 // The ready, decimated samples of every term asked for so far, one column per term name:
-// each new batch of terms is one streaming pass over the logs. The time-constant search
+// each new batch of terms is one pass of the terms over the logs' recorded inputs. The time-constant search
 // asks for many columns, so past a byte budget the cache starts afresh.
 class ColumnCache {
  public:
-  ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline)
-      : logs_(&logs), axis_(axis), pipeline_(pipeline) {
-    pipeline_.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
-    const FeatureTable table = feature_table(logs, pipeline_, axis, true);
-    target_ = table.target;
-    run_start_ = table.run_start;
-  }
+  ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline);
 
   const Eigen::VectorXd& target() const { return target_; }
   // The held-out blocks of the searches' cross-validation (cv_blocks).
@@ -35,23 +29,7 @@ class ColumnCache {
     return cv_blocks(target_.size(), run_start_, folds, by);
   }
 
-  void ensure(const std::vector<std::string>& names) {
-    pipeline_.terms.clear();
-    for (const auto& name : names) {
-      if (!columns_.count(name)) pipeline_.terms.push_back(FeatureTerm::parse(name));
-    }
-    if (pipeline_.terms.empty()) return;
-    const std::size_t column_bytes = static_cast<std::size_t>(target_.size()) * sizeof(double);
-    if ((columns_.size() + pipeline_.terms.size()) * column_bytes > kBudgetBytes) {
-      std::erase_if(columns_, [&](const auto& entry) {
-        return std::find(names.begin(), names.end(), entry.first) == names.end();
-      });
-    }
-    const FeatureTable table = feature_table(*logs_, pipeline_, axis_, true);
-    for (std::size_t j = 0; j < pipeline_.terms.size(); ++j) {
-      columns_[pipeline_.terms[j].name()] = table.features.col(static_cast<Eigen::Index>(j));
-    }
-  }
+  void ensure(const std::vector<std::string>& names);
 
   Eigen::MatrixXd matrix(const std::vector<std::string>& names) {
     ensure(names);
@@ -62,9 +40,8 @@ class ColumnCache {
 
  private:
   static constexpr std::size_t kBudgetBytes = std::size_t{256} << 20;
-  const std::vector<ChamberLog>* logs_;
-  std::size_t axis_;
-  Pipeline pipeline_;
+  // The terms' inputs over each log, smoothed once (every temperature channel recorded).
+  std::vector<RecordedInputs> inputs_;
   Eigen::VectorXd target_;
   std::vector<std::size_t> run_start_;
   std::map<std::string, Eigen::VectorXd> columns_;

@@ -102,6 +102,8 @@ class FeatureStream {
   // they read is missing).
   const Sample& push(double time, double gyro, double temperature, std::span<const double> channels = {});
   void reset();
+  // What the terms read at the last push (channel values: the channels the terms read).
+  const TermInputs& inputs() const { return inputs_; }
 
  private:
   const Pipeline* pipeline_;
@@ -116,6 +118,7 @@ class FeatureStream {
   double last_time_ = 0;
   TermEvaluator terms_;
   std::vector<double> features_;
+  TermInputs inputs_;
   Sample sample_;
 };
 
@@ -138,6 +141,25 @@ struct FeatureTable {
 FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log,
                                  std::size_t gyro_axis, std::size_t temperature_channel,
                                  bool decimate);
+
+// The terms' inputs at every row of one axis of a log (ΔT, rate, step, the channels that
+// `pipeline`'s terms read), smoothed once, and the rows a table of `pipeline` keeps: any
+// list of terms on the same node channel and channels evaluates over it to the columns
+// build_feature_table would give, bit for bit, without smoothing the log again (the
+// feature searches evaluate thousands of lists over one log).
+struct RecordedInputs {
+  std::vector<double> delta_t, rate, step_seconds;
+  std::vector<std::size_t> channels;       // recorded channels, 0-based, as Pipeline::channels()
+  std::size_t width = 0;                   // channel numbers per row: channels.back() + 1
+  std::vector<double> channel_means, channel_rates;  // row-major, `width` per row
+  std::vector<std::size_t> kept;           // rows a (decimated) table keeps
+  std::size_t rows() const { return delta_t.size(); }
+};
+RecordedInputs record_inputs(const Pipeline& pipeline, const ChamberLog& log, std::size_t gyro_axis,
+                             std::size_t temperature_channel, bool decimate);
+// One column per term, one row per kept row. A term reading a channel not recorded is a
+// UsageError.
+Eigen::MatrixXd evaluate_terms(const std::vector<FeatureTerm>& terms, const RecordedInputs& inputs);
 
 // Appends the rows of `more` to `table` (several logs fitted together), with its runs.
 void append_rows(FeatureTable& table, const FeatureTable& more);

@@ -191,6 +191,49 @@ TEST(BuildFeatureTable, DecimationKeepsEveryKthReadySampleAndRestartsAfterAGap) 
   EXPECT_EQ(kept.time[24], 230.0);  // the second segment starts over at its first ready sample
 }
 
+// The feature searches evaluate thousands of term lists over recorded inputs instead of
+// streaming the log again: the columns must be build_feature_table's, bit for bit, through a
+// gap, with decimation, for stateful terms and for terms reading other channels.
+TEST(RecordedInputs, EvaluateToTheColumnsOfBuildFeatureTable) {
+  Pipeline recording = ramp_pipeline();
+  recording.decimation = 3;
+  recording.terms = {FeatureTerm::parse("dT"), FeatureTerm::parse("grad:2-1"), FeatureTerm::parse("grad:3-1")};
+  std::vector<double> time;
+  for (int k = 0; k < 300; ++k) time.push_back(0.5 * k);
+  for (int k = 0; k < 200; ++k) time.push_back(400 + 0.5 * k);  // a gap: the lags restart
+  ChamberLog log = one_axis_log(time, std::vector<double>(time.size(), 0.0), {});
+  log.temperature_names = {"a", "b", "c"};
+  log.temperature.assign(3, {});
+  for (std::size_t i = 0; i < time.size(); ++i) {
+    const double t = time[i];
+    log.gyro[0][i] = std::sin(0.01 * t);
+    log.temperature[0].push_back(20 + 5 * std::sin(0.02 * t));
+    log.temperature[1].push_back(21 + 4 * std::sin(0.02 * t - 0.3));
+    log.temperature[2].push_back(19 + 0.01 * t);
+  }
+  const RecordedInputs recorded = record_inputs(recording, log, 0, 0, true);
+  EXPECT_EQ(recorded.channels, (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_EQ(recorded.rows(), time.size());
+
+  Pipeline asked = recording;
+  asked.terms.clear();
+  for (const char* name : {"lag:30", "lagrate:30", "hinge:30:1.5", "lag2:20:10", "nodehinge:20:10:0:-1", "play:30:0.5",
+                           "dir:40:30", "gradrate:30:15", "lag:30*lagrate:30", "rate^2", "grad:3-2", "gradrate:2-1"}) {
+    asked.terms.push_back(FeatureTerm::parse(name));
+  }
+  const FeatureTable streamed = build_feature_table(asked, log, 0, 0, true);
+  const Eigen::MatrixXd columns = evaluate_terms(asked.terms, recorded);
+  ASSERT_EQ(recorded.kept, streamed.row);
+  ASSERT_EQ(columns.rows(), streamed.features.rows());
+  ASSERT_EQ(columns.cols(), streamed.features.cols());
+  EXPECT_TRUE((columns.array() == streamed.features.array()).all());
+
+  // A channel the recording did not smooth is refused, not read as zero.
+  Pipeline own_only = recording;
+  own_only.terms = {FeatureTerm::parse("dT"), FeatureTerm::parse("grad:2-1")};
+  EXPECT_THROW(evaluate_terms({FeatureTerm::parse("grad:3-1")}, record_inputs(own_only, log, 0, 0, true)), UsageError);
+}
+
 TEST(BuildFeatureTable, AppendRowsConcatenates) {
   const Pipeline pipeline = ramp_pipeline();
   std::vector<double> time, gyro, temperature;
