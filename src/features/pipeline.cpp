@@ -261,21 +261,22 @@ RecordedInputs record_inputs(const Pipeline& pipeline, const ChamberLog& log, st
                              std::size_t temperature_channel, bool decimate) {
   RecordedInputs recorded;
   recorded.channels = pipeline.channels();
-  recorded.width = recorded.channels.empty() ? 0 : recorded.channels.back() + 1;
   recorded.delta_t.reserve(log.rows());
   recorded.rate.reserve(log.rows());
   recorded.step_seconds.reserve(log.rows());
-  recorded.channel_means.reserve(log.rows() * recorded.width);
-  recorded.channel_rates.reserve(log.rows() * recorded.width);
+  recorded.channel_means.reserve(log.rows() * recorded.width());
+  recorded.channel_rates.reserve(log.rows() * recorded.width());
   stream_log(pipeline, log, gyro_axis, temperature_channel, decimate,
-             [&](std::size_t i, const FeatureStream::Sample&, const FeatureStream& stream, bool kept) {
+             [&](std::size_t i, const FeatureStream::Sample& sample, const FeatureStream& stream, bool kept) {
                const TermInputs& in = stream.inputs();
                recorded.delta_t.push_back(in.delta_t);
                recorded.rate.push_back(in.rate);
                recorded.step_seconds.push_back(in.step_seconds);
                recorded.channel_means.insert(recorded.channel_means.end(), in.channel_means.begin(), in.channel_means.end());
                recorded.channel_rates.insert(recorded.channel_rates.end(), in.channel_rates.begin(), in.channel_rates.end());
-               if (kept) recorded.kept.push_back(i);
+               if (!kept) return;
+               recorded.kept.push_back(i);
+               recorded.target.push_back(sample.smoothed_gyro);
              });
   return recorded;
 }
@@ -294,7 +295,7 @@ Eigen::MatrixXd evaluate_terms(const std::vector<FeatureTerm>& terms, const Reco
       static_cast<Eigen::Index>(inputs.kept.size()), static_cast<Eigen::Index>(terms.size()));
   std::vector<double> values(terms.size());
   std::size_t next = 0;
-  const std::size_t width = inputs.width;
+  const std::size_t width = inputs.width();
   for (std::size_t i = 0; i < inputs.rows() && next < inputs.kept.size(); ++i) {
     const TermInputs in{inputs.delta_t[i], inputs.rate[i], inputs.step_seconds[i],
                         std::span<const double>(inputs.channel_means).subspan(i * width, width),

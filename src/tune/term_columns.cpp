@@ -12,18 +12,24 @@
 namespace thermodrift {
 
 ColumnCache::ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline) {
-  Pipeline recording = pipeline;
-  recording.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
-  const FeatureTable table = feature_table(logs, recording, axis, true);
-  target_ = table.target;
-  run_start_ = table.run_start;
   // A term reading each other channel, so that every channel's smoothed value and rate is
   // recorded for the grad terms the searches offer.
+  Pipeline recording = pipeline;
+  recording.terms = {FeatureTerm(FeatureTerm::Kind::delta_t)};
   const std::size_t channels = logs.empty() ? 0 : logs.front().temperature.size();
   for (std::size_t c = 1; c < channels; ++c) recording.terms.push_back(FeatureTerm::parse(fmt::format("grad:{}-1", c + 1)));
+  // The logs' kept rows end to end, each log a run (as feature_table joins them).
+  std::vector<double> target;
   for (const auto& log : logs) {
     inputs_.push_back(record_inputs(recording, log, axis, temperature_channel_per_axis(log).at(axis), true));
+    if (target.empty()) {
+      run_start_ = {0};
+    } else {
+      run_start_.push_back(target.size());
+    }
+    target.insert(target.end(), inputs_.back().target.begin(), inputs_.back().target.end());
   }
+  target_ = Eigen::Map<const Eigen::VectorXd>(target.data(), static_cast<Eigen::Index>(target.size()));
 }
 
 void ColumnCache::ensure(const std::vector<std::string>& names) {

@@ -150,10 +150,12 @@ FeatureTable build_feature_table(const Pipeline& pipeline, const ChamberLog& log
 struct RecordedInputs {
   std::vector<double> delta_t, rate, step_seconds;
   std::vector<std::size_t> channels;       // recorded channels, 0-based, as Pipeline::channels()
-  std::size_t width = 0;                   // channel numbers per row: channels.back() + 1
-  std::vector<double> channel_means, channel_rates;  // row-major, `width` per row
+  std::vector<double> channel_means, channel_rates;  // row-major, width() per row
   std::vector<std::size_t> kept;           // rows a (decimated) table keeps
+  std::vector<double> target;              // the smoothed gyro at the kept rows: the table's target
   std::size_t rows() const { return delta_t.size(); }
+  // Channel numbers per row: the highest recorded channel + 1.
+  std::size_t width() const { return channels.empty() ? 0 : channels.back() + 1; }
 };
 RecordedInputs record_inputs(const Pipeline& pipeline, const ChamberLog& log, std::size_t gyro_axis,
                              std::size_t temperature_channel, bool decimate);
