@@ -5,6 +5,7 @@
 //                                  [--methods paper,linear,stepwise,svr,oracle] [--threads N]
 //                                  [--evaluations N] [--training cycle|two-runs]
 //                                  [--folds-by time|runs] [--sensor drawn|coil]
+//                                  [--without turn-on,self-heating]
 //                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
@@ -18,7 +19,8 @@
 // user with two chamber runs would fit them (--data twice). The `oracle` row is a bound, not
 // a method: least squares on the law's own regressors and true states (sim::law_regressors),
 // so only the coefficients come from the training log. --sensor coil (a diagnostic) puts
-// every thermometer on its own coil; --oracle-without NAME,... leaves regressors out of the
+// every thermometer on its own coil; --without leaves the turn-on transient or the
+// self-heating out of every unit; --oracle-without NAME,... leaves regressors out of the
 // oracle. docs/generalization.md says what the methods are and
 // has measured figures.
 #include <time.h>
@@ -93,6 +95,9 @@ struct Arguments {
   // A diagnostic, not a test: each axis' sensor moved onto its own coil (2 s), so the
   // temperature column is the coil's and no thermal path lies between them.
   bool sensor_on_coil = false;
+  // Diagnostics too: physics left out of every drawn unit (--without turn-on,self-heating).
+  bool without_turn_on = false;
+  bool without_self_heating = false;
   std::vector<std::size_t> oracle_without;  // regressors the oracle leaves out (sim::law_regressor_names)
   std::optional<double> rate_span;          // --rate-span of the --features auto methods (fit's default if absent)
   bool other_channels = FeatureSelectionOptions{}.other_channels;  // --node-channel any|own
@@ -116,7 +121,7 @@ Arguments parse(int argc, char** argv) {
     if (i + 1 >= argc) {
       fmt::print(stderr, "usage: {} [--seeds acceptance|development|S,S,...] [--limit N] [--methods "
                          "paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] [--identify greedy|thermal-node] "
-                         "[--training cycle|two-runs] [--folds-by time|runs] [--sensor drawn|coil] [--oracle-without NAME,...] [--json FILE]\n", argv[0]);
+                         "[--training cycle|two-runs] [--folds-by time|runs] [--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] [--json FILE]\n", argv[0]);
       std::exit(2);
     }
     const std::string value = argv[++i];
@@ -134,6 +139,13 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--training" && (value == "cycle" || value == "two-runs")) args.two_runs = value == "two-runs";
     else if (flag == "--folds-by") args.folds_by = parse_folds_by(value);
     else if (flag == "--sensor" && (value == "drawn" || value == "coil")) args.sensor_on_coil = value == "coil";
+    else if (flag == "--without") {
+      for (const auto& name : split(value)) {
+        if (name == "turn-on") args.without_turn_on = true;
+        else if (name == "self-heating") args.without_self_heating = true;
+        else throw std::invalid_argument(fmt::format("unknown physics '{}' (turn-on, self-heating)", name));
+      }
+    }
     else if (flag == "--oracle-without") {
       const auto names = sim::law_regressor_names();
       for (const auto& name : split(value)) {
@@ -352,6 +364,11 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       unit.axes[a].sensor_node = static_cast<int>(unit.axes[a].node_time_constants_s.size()) - 1;
       unit.axes[a].sensor_time_constant_s = 2;
     }
+  }
+  if (args.without_self_heating) unit.case_self_heating_c = 0;
+  for (auto& axis : unit.axes) {
+    if (args.without_turn_on) axis.turn_on_dph = 0;
+    if (args.without_self_heating) axis.self_heating_c = 0;
   }
   const bool oracle = std::find(args.methods.begin(), args.methods.end(), Method::oracle) != args.methods.end();
   auto regressors_of = [&](const sim::Setpoint& programme) {

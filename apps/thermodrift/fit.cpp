@@ -187,7 +187,7 @@ void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
       ->check(kPositive);
   app.add_option("--decimate", args.decimate, "keep every Nth ready sample for fitting (default: ~10 per window)")
       ->check(whole_number(1, 1000000000));
-  add_list_option(app, "--features", args.features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, products, powers), or auto to choose them per axis by blocked CV; docs/features.md");
+  add_list_option(app, "--features", args.features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, on:TAU, products, powers), or auto to choose them per axis by blocked CV; docs/features.md");
   add_identify_option(app, args.identify);
   app.add_option("--node-channel", args.node_channel,
                   "with --features auto and one --temp column per axis: look for each axis' thermal node on its "

@@ -60,6 +60,9 @@ FactorCode factor_code(const FeatureFactor& factor, const FactorPlace& place) {
       code = {"", fmt::format("{}_play({}, delta_t, {}, {}, {})", p, s, place.step, Literal::time(atom.tau), literal(atom.level)),
               1, 10};
       break;
+    case Kind::turn_on:
+      code = {"", fmt::format("{}_turn_on({}, {}, {})", p, s, place.step, Literal::time(atom.tau)), 1, 4};
+      break;
     case Kind::lag_rate:
       code = {"", fmt::format("{}_lag_rate(&{}[0], delta_t, {}, {})", p, s, place.step, Literal::time(atom.tau)), 1, 7};
       break;

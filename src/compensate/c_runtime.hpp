@@ -295,6 +295,13 @@ static inline @p@_real @p@_play(@p@_real state[2], @p@_real delta_t, double step
   return (state[0] - state[1]) / width;
 }
 
+/* on:TAU: e^(-t/TAU), t the time since the (re)start (state[0]): 1 at power-on, then a
+ * lag towards 0 */
+static inline @p@_real @p@_turn_on(@p@_real state[2], double step_seconds, double tau) {
+  state[0] = step_seconds > 0 ? @p@_lag(state[0], (@p@_real)0, step_seconds, tau) : (@p@_real)1;
+  return state[0];
+}
+
 /* gradrate:TAU:TG, degC/min^2: the rate of a TG-lag (state[1]) of lagrate:TAU */
 static inline @p@_real @p@_gradient_rate(@p@_real state[2], @p@_real delta_t, double step_seconds,
                                           double tau, double tau_gradient) {

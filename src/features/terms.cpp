@@ -19,7 +19,7 @@ namespace {
 constexpr std::string_view kKnownTerms =
     "dT, rate, lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, "
     "hinge:TAU:K, lead:TAU, leadhinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, "
-    "products A*B and powers A^2";
+    "on:TAU, products A*B and powers A^2";
 constexpr double kMaxTimeConstant = 1e6;  // s; eleven days is no thermal lag of a gyro
 constexpr double kMaxKnot = 1000;  // °C of ΔT: beyond any chamber
 constexpr int kMaxPower = 4;
@@ -150,6 +150,10 @@ FeatureAtom parse_atom(const std::string& term, std::string_view text) {
     atom.level = *width;
     return atom;
   }
+  if (head == "on") {
+    if (parts.size() != 2) bad_term(term, "on takes one time constant: on:TAU");
+    return {Kind::turn_on, parse_time_constant(term, parts[1])};
+  }
   if (head == "lead") {
     if (parts.size() != 2) bad_term(term, "lead takes one time constant: lead:TAU");
     return {Kind::lead, parse_time_constant(term, parts[1])};
@@ -201,6 +205,7 @@ std::string FeatureAtom::name() const {
     case Kind::lag2_rate: return fmt::format("lag2rate:{}:{}", tau, tau2);
     case Kind::node_hinge: return fmt::format("nodehinge:{}:{}:{}:{}", tau, tau2, zero, level);
     case Kind::play: return fmt::format("play:{}:{}", tau, level);
+    case Kind::turn_on: return fmt::format("on:{}", tau);
   }
   return "?";
 }
@@ -325,6 +330,11 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
       state.second = std::clamp(state.second, state.first - atom.level, state.first + atom.level);
       return (state.first - state.second) / atom.level;
     }
+    case Kind::turn_on:
+      // 1 at a (re)start, then a lag towards 0: exp(-t/TAU) exactly for any steps.
+      state.first = step_seconds > 0 ? lag(state.first_step, state.first_decay, state.first, 0.0, step_seconds, atom.tau)
+                                     : 1.0;
+      return state.first;
     case Kind::direction: {
       double source = inputs.rate;
       if (atom.tau2 > 0) {

@@ -29,15 +29,21 @@ struct DynamicTerm {
   enum class Kind {
     gradient_rate, memory, second_lag, play, channel_gradient, channel_gradient_rate,
     asymmetric_rate,  // the node's rate times the sign of its travel: heating and cooling rates weigh differently
-    rate_tempco       // the node's rate times its level: a rate sensitivity that changes with temperature
+    rate_tempco,      // the node's rate times its level: a rate sensitivity that changes with temperature
+    turn_on,          // exp(-t/τ) since power-on: the gyro's turn-on transient
+    self_heating      // exp(-t/τ), τ the node's lag: heat switched on upstream of the node settling through it
   } kind;
-  double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W
+  double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W; τ of on:τ
   double rate_scale = 0;  // R0 of a memory, °C/min (0: the default, kDirectionRateScale); not refined
   std::string channel_term{};  // grad:A-B or gradrate:A-B: a measured gradient, no constant of its own
 
   bool measured() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
   // Terms without a constant of their own to refine.
-  bool fixed() const { return measured() || kind == Kind::asymmetric_rate || kind == Kind::rate_tempco; }
+  bool fixed() const {
+    return measured() || kind == Kind::asymmetric_rate || kind == Kind::rate_tempco || kind == Kind::self_heating;
+  }
+  // Terms that describe the start of a run rather than the node's dynamics.
+  bool start_transient() const { return kind == Kind::turn_on || kind == Kind::self_heating; }
 
   std::string name(const NodeNames& node) const {
     switch (kind) {
@@ -52,6 +58,8 @@ struct DynamicTerm {
       // beyond 0.05 °C/min: the product is the rate's magnitude, smooth through zero.
       case Kind::asymmetric_rate: return fmt::format("{}*dir:60:{}:0.05", node.rate, node.first_tau);
       case Kind::rate_tempco: return fmt::format("{}*{}", node.level, node.rate);
+      case Kind::turn_on: return fmt::format("on:{}", tau);
+      case Kind::self_heating: return fmt::format("on:{}", node.tau);
     }
     return {};
   }
@@ -65,6 +73,8 @@ struct DynamicTerm {
       case Kind::memory: return 3000;
       case Kind::second_lag: return 1200;
       case Kind::play: return 10;
+      case Kind::turn_on: return 1200;
+      case Kind::self_heating:
       case Kind::channel_gradient:
       case Kind::channel_gradient_rate:
       case Kind::asymmetric_rate:
@@ -98,10 +108,12 @@ struct NodeModel {
   std::vector<DynamicTerm> dynamics;
 
   bool plain() const { return tau2 == 0 && zero == 0; }
-  // Dynamic terms modelled on the node (a measured gradient is not): at most
-  // max_dynamic_terms of them.
+  // Dynamic terms modelled on the node (a measured gradient is not, nor a start-of-run
+  // term, which describes how the run began, not the node): at most max_dynamic_terms.
   std::size_t modelled_dynamics() const {
-    return static_cast<std::size_t>(std::count_if(dynamics.begin(), dynamics.end(), [](const DynamicTerm& t) { return !t.measured(); }));
+    return static_cast<std::size_t>(std::count_if(dynamics.begin(), dynamics.end(), [](const DynamicTerm& t) {
+      return !t.measured() && !t.start_transient();
+    }));
   }
   // The lag the dynamic terms read: the node's, or the sum of a series pair's.
   double dynamics_tau() const { return tau + tau2; }
@@ -468,6 +480,8 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
     candidates.push_back({DynamicTerm::Kind::asymmetric_rate});
     candidates.push_back({DynamicTerm::Kind::rate_tempco});
+    for (const double tau : {150.0, 300.0, 600.0, 1200.0}) candidates.push_back({DynamicTerm::Kind::turn_on, tau});
+    candidates.push_back({DynamicTerm::Kind::self_heating});
     for (const auto& term : channel_candidate_terms(logs.front(), axis)) {
       const bool rate = term.rfind("gradrate:", 0) == 0;
       candidates.push_back({rate ? DynamicTerm::Kind::channel_gradient_rate : DynamicTerm::Kind::channel_gradient, 0, 0, term});

@@ -82,7 +82,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   models().push_back(fit(log, thermodrift::ModelKind::svr, {"dT", "rate"}));
   models().push_back(fit(log, thermodrift::ModelKind::linear,
                          {"lag:600", "hinge:600:0", "lagrate:600", "rate", "play:600:1", "dir:900:600",
-                          "gradrate:600:120", "dT^2"}));
+                          "gradrate:600:120", "dT^2", "on:600"}));
   return 0;
 }
 

@@ -36,6 +36,9 @@
 //                    beyond; unitless in [-1, 1]. A hysteresis set by how far the temperature
 //                    moved since it last turned, whatever the rate (dir's memory is set by
 //                    the rate and how long it lasted)
+//   on:TAU           exp(-t/TAU), t the time since the stream's (re)start, unitless: 1 at power-on,
+//                    0 long after; a turn-on transient (the gyro's own, and its self-heating
+//                    settling through the unit), as a compensator started at power-on sees it
 //   xN               column N of libsvm-format data, as given (never streamed)
 // A term is one atom or a product of atoms with powers: "dT^2", "dT*rate", "lag:600^2*rate".
 //
@@ -60,9 +63,10 @@ inline constexpr std::size_t kMaxTemperatureChannels = 64;
 
 struct FeatureAtom {
   enum class Kind { delta_t, rate, lag, lag_rate, gradient_rate, direction, input, channel_gradient,
-                    channel_gradient_rate, hinge, lead, lead_hinge, lag2, lag2_rate, node_hinge, play };
+                    channel_gradient_rate, hinge, lead, lead_hinge, lag2, lag2_rate, node_hinge, play,
+                    turn_on };
   Kind kind = Kind::delta_t;
-  double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory)
+  double tau = 0;               // s: lag, lagrate, gradrate (first lag), dir (memory), on (decay)
   double tau2 = 0;              // s: gradrate (gradient lag); dir (lag of its rate, 0: smoothed rate)
   std::size_t input_index = 0;  // 0-based column, for Kind::input
   std::size_t channel = 0;      // 0-based temperature channels A and B of grad / gradrate:A-B
@@ -133,7 +137,7 @@ class TermEvaluator {
 
  private:
   struct State {
-    double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG); L1 of lag2
+    double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG); L1 of lag2; on's value
     double second = 0;  // G (gradrate), the direction memory (dir), L2 (lag2, lag2rate, nodehinge) or P (play)
     // exp(-step/τ) of each filter for the last step length: a log of even steps needs one exp
     // per filter, not one per sample.

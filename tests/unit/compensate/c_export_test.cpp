@@ -303,7 +303,8 @@ TEST_F(CExport, ThermalLagTermsMatchCompensatorThroughAGap) {
 
 // The series lags, the node with a zero (lag2, lag2rate, nodehinge), the play (two widths)
 // and the node's rate responses the identification offers (its rate times its direction of
-// travel, its level times its rate), through a gap. In
+// travel, its level times its rate), and the turn-on transient, through a gap (which
+// starts the transient again). In
 // float the node's lead multiplies the difference of two lag states by TL/T2 (7.5 here), and
 // with it their rounding, so float is held to 1e-3 of the drift scale, double to 1e-9.
 TEST_F(CExport, NodeTermsMatchCompensatorThroughAGap) {
@@ -311,7 +312,8 @@ TEST_F(CExport, NodeTermsMatchCompensatorThroughAGap) {
                                           "nodehinge:420:0:900:-4", "nodehinge:420:120:900:5^2*rate", "rate",
                                           "play:420:1.5", "play:900:0.5*rate", "play:420:4",
                                           "lagrate:420*dir:60:420:0.05", "lag:420*lagrate:420",
-                                          "lag2rate:420:120*dir:60:420:0.05", "lag2:420:120*lag2rate:420:120"};
+                                          "lag2rate:420:120*dir:60:420:0.05", "lag2:420:120*lag2rate:420:120",
+                                          "on:600", "on:1500"};
   const DriftModel linear = fitted_model(*log_, "linear", terms);
   const ChamberLog cut = without_rows(*log_, 5000, 5600);
   expect_matches(linear, cut, false, 1e-9);

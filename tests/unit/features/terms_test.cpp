@@ -26,7 +26,7 @@ TEST(FeatureTerms, NamesRoundTrip) {
                                  "gradrate:12-3", "grad:2-1*lag:600", "hinge:600:-12.5", "hinge:600:0", "hinge:60:3*rate", "lead:900",
                                  "leadhinge:900:-3.5", "lag2:600:120", "lag2rate:600:120", "nodehinge:600:120:0:-3.5",
                                  "nodehinge:600:0:1800:12", "nodehinge:600:120:900:0*rate", "play:600:1.5",
-                                 "play:600:0.25*rate"}) {
+                                 "play:600:0.25*rate", "on:300", "on:450*lag:600"}) {
     EXPECT_EQ(FeatureTerm::parse(name).name(), name);
   }
   const auto term = FeatureTerm::parse("gradrate:420:240");
@@ -50,7 +50,7 @@ TEST(FeatureTerms, MalformedTermsAreUsageErrorsNamingTheTerm) {
                                 "nodehinge:600:0:0", "nodehinge:0:0:0:1", "nodehinge:600:-1:0:1",
                                 "nodehinge:600:0:x:1", "nodehinge:600:0:0:nan", "nodehinge:600:0:0:1:2",
                                 "play", "play:600", "play:600:0", "play:600:-1", "play:0:1", "play:600:1e9",
-                                "play:600:1:2"}) {
+                                "play:600:1:2", "on", "on:0", "on:-5", "on:300:2", "on:x"}) {
     try {
       FeatureTerm::parse(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
@@ -78,6 +78,28 @@ TEST(FeatureTerms, LagIsExactForAStepWhateverTheSampling) {
     EXPECT_NEAR(values[0], expected, 1e-14) << "t = " << t;
     EXPECT_NEAR(values[1], (1 - expected) / tau * 60, 1e-14) << "t = " << t;  // °C/min
   }
+}
+
+// on:TAU is exp(-t/TAU), t counted from the last (re)start, at any sampling, whatever
+// the temperature does; a step of 0 (a gap) starts it again at 1.
+TEST(FeatureTerms, TurnOnDecaysFromEachRestart) {
+  const auto terms = parse_all({"on:300", "on:450*dT"});
+  TermEvaluator evaluator(terms);
+  std::vector<double> values(2);
+  evaluator.push(2.0, 0.5, 0, values);
+  EXPECT_EQ(values[0], 1);
+  EXPECT_EQ(values[1], 2.0);
+  double t = 0;
+  for (const double step : {0.1, 7.0, 33.3, 1.0, 250.0, 0.01, 600.0, 12.0}) {
+    t += step;
+    evaluator.push(-1.5 + t / 100, 3.0, step, values);
+    EXPECT_NEAR(values[0], std::exp(-t / 300), 1e-14) << "t = " << t;
+    EXPECT_NEAR(values[1], std::exp(-t / 450) * (-1.5 + t / 100), 1e-13) << "t = " << t;
+  }
+  evaluator.push(4.0, 0, 0, values);
+  EXPECT_EQ(values[0], 1);
+  evaluator.push(4.0, 0, 30, values);
+  EXPECT_NEAR(values[0], std::exp(-30.0 / 300), 1e-15);
 }
 
 // On a ramp r the discrete lag settles r·h·a/(1 - a) behind the input (a = exp(-h/TAU)),
