@@ -38,11 +38,18 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
                                  const std::vector<ChamberLog>& logs, double settle, const StopToken& stop) {
   const std::vector<AxisEvaluation> evaluations = evaluate_axes(model, logs, settle, stop);
   double longest = 0;
-  for (const auto& axis : model.axes) longest = std::max(longest, axis.pipeline.longest_time_constant());
+  bool turn_on = false;  // an on:TAU term: the log's start is taken as power-on
+  for (const auto& axis : model.axes) {
+    longest = std::max(longest, axis.pipeline.longest_time_constant());
+    for (const auto& term : axis.pipeline.terms) {
+      for (const auto& factor : term.factors) turn_on = turn_on || factor.atom.kind == FeatureAtom::Kind::turn_on;
+    }
+  }
   if (settle == 0 && longest > 0) {
-    warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log; if it starts "
+    warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log{}; if it starts "
                      "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics",
-                     longest, 3 * longest, 3 * longest));
+                     longest, turn_on ? ", and its on:TAU terms take that start as power-on" : "", 3 * longest,
+                     3 * longest));
   }
   nlohmann::json result = evaluation_header(model_file, settle);
   nlohmann::json axes = nlohmann::json::array();

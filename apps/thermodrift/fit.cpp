@@ -27,8 +27,10 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
     }
   }
   const bool auto_features = args.features.size() == 1 && args.features.front() == "auto";
-  if (app.count("--node-channel") && !(auto_features && args.identify == FeatureSelectionOptions::Method::thermal_node)) {
-    throw UsageError("--node-channel applies to --features auto with the thermal-node identification");
+  for (const char* option : {"--node-channel", "--log-start"}) {
+    if (app.count(option) && !(auto_features && args.identify == FeatureSelectionOptions::Method::thermal_node)) {
+      throw UsageError(fmt::format("{} applies to --features auto with the thermal-node identification", option));
+    }
   }
   FitRequest request;  // the library holds the defaults and the rule of when to tune
   request.model = *model_kind_named(args.model);  // --model accepts the kinds' names only
@@ -38,6 +40,7 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
   request.terms = args.features;
   request.identify = args.identify;
   request.other_channels = args.node_channel == "any";
+  request.power_on_start = args.log_start == "power-on";
   request.folds_by = parse_folds_by(args.folds_by);
   request.threads = args.threads;
   request.seed = args.seed;
@@ -195,6 +198,11 @@ void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
                   "mixed, docs/features.md)")
       ->check(CLI::IsMember({"own", "any"}))
       ->option_text("own|any");
+  app.add_option("--log-start", args.log_start,
+                 "with --features auto: the training logs start at power-on (power-on, default: the turn-on "
+                 "transient and self-heating terms on:TAU are offered) or with the unit already running (running)")
+      ->check(CLI::IsMember({"power-on", "running"}))
+      ->option_text("power-on|running");
   app.add_option("--tune", args.tune, "tune C and σ per axis: afsa (default for svr), grid or random")
       ->check(CLI::IsMember({"afsa", "grid", "random"}));
   app.add_option("--objective", args.objective,

@@ -29,6 +29,7 @@ struct FitArguments {
   std::vector<std::string> features{"dT", "rate"};
   FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
   std::string node_channel = "own";
+  std::string log_start = "power-on";
   std::string tune;
   std::string objective = "cv";
   std::uint64_t seed = 1;

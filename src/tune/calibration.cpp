@@ -261,6 +261,7 @@ CalibrationOptions calibration_options(const FitRequest& request) {
   options.terms = request.terms;
   options.selection.method = request.identify;
   options.selection.other_channels = request.other_channels;
+  options.selection.power_on_start = request.power_on_start;
   options.selection.threads = threads;
   options.folds_by = request.folds_by;
   options.stop = request.stop;

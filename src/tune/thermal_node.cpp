@@ -480,8 +480,10 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
     candidates.push_back({DynamicTerm::Kind::asymmetric_rate});
     candidates.push_back({DynamicTerm::Kind::rate_tempco});
-    for (const double tau : {150.0, 300.0, 600.0, 1200.0}) candidates.push_back({DynamicTerm::Kind::turn_on, tau});
-    candidates.push_back({DynamicTerm::Kind::self_heating});
+    if (options.power_on_start) {
+      for (const double tau : {150.0, 300.0, 600.0, 1200.0}) candidates.push_back({DynamicTerm::Kind::turn_on, tau});
+      candidates.push_back({DynamicTerm::Kind::self_heating});
+    }
     for (const auto& term : channel_candidate_terms(logs.front(), axis)) {
       const bool rate = term.rfind("gradrate:", 0) == 0;
       candidates.push_back({rate ? DynamicTerm::Kind::channel_gradient_rate : DynamicTerm::Kind::channel_gradient, 0, 0, term});

@@ -46,14 +46,18 @@ TEST(OptionChecks, OptionsThatCannotApplyAreUsageErrors) {
               std::string::npos)
         << result.err;
   }
-  // --node-channel chooses where --features auto's thermal node is looked for: nothing else.
-  for (const std::string features : {"", " --features dT,lag:600", " --features auto --identify greedy"}) {
-    SCOPED_TRACE(features);
-    const auto result = run_thermodrift(dir, "fit --data log.csv --model linear --node-channel any --out m.json" + features);
-    EXPECT_EQ(result.status, 2);
-    EXPECT_NE(result.err.find("--node-channel applies to --features auto with the thermal-node identification"),
-              std::string::npos)
-        << result.err;
+  // --node-channel chooses where --features auto's thermal node is looked for, --log-start
+  // whether it offers the start-of-run terms: nothing else.
+  for (const std::string option : {"--node-channel any", "--log-start running"}) {
+    for (const std::string features : {"", " --features dT,lag:600", " --features auto --identify greedy"}) {
+      SCOPED_TRACE(option + features);
+      const auto result = run_thermodrift(dir, "fit --data log.csv --model linear " + option + " --out m.json" + features);
+      EXPECT_EQ(result.status, 2);
+      EXPECT_NE(result.err.find(option.substr(0, option.find(' ')) +
+                                " applies to --features auto with the thermal-node identification"),
+                std::string::npos)
+          << result.err;
+    }
   }
   EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
   ASSERT_EQ(run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --smooth 50 --out m.json").status, 0);

@@ -71,6 +71,7 @@ struct FitRequest {
   std::vector<std::string> terms{"dT", "rate"};
   FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
   bool other_channels = FeatureSelectionOptions{}.other_channels;  // the node on any thermometer
+  bool power_on_start = FeatureSelectionOptions{}.power_on_start;  // the logs start at power-on
   FoldsBy folds_by = FoldsBy::time;
   int threads = 0;  // 0: every core
   std::uint64_t seed = 1;

@@ -46,6 +46,11 @@ struct FeatureSelectionOptions {
   // 120 axes to another channel, 27 better (one from 1,300x the floor to 2-4x) and 12
   // worse (some 5-15x); docs/features.md, "The node's thermometer".
   bool other_channels = false;
+  // thermal_node: the training logs start at power-on, so the start-of-run terms (on:TAU,
+  // the turn-on transient and self-heating settling through the node) are offered. False
+  // for logs recorded with the unit already running: the terms would fit a transient that
+  // is not there.
+  bool power_on_start = true;
   // Asked before each set is scored (both methods): a stop request throws Interrupted.
   StopToken stop;
   // Axes searched at once by select_features_per_axis (and so by calibrate); each axis'
