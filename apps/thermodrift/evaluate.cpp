@@ -41,9 +41,10 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
   bool turn_on = false;  // an on:TAU term: the log's start is taken as power-on
   for (const auto& axis : model.axes) {
     longest = std::max(longest, axis.pipeline.longest_time_constant());
-    for (const auto& term : axis.pipeline.terms) {
-      for (const auto& factor : term.factors) turn_on = turn_on || factor.atom.kind == FeatureAtom::Kind::turn_on;
-    }
+    const auto& terms = axis.pipeline.terms;
+    turn_on = turn_on || std::any_of(terms.begin(), terms.end(), [](const FeatureTerm& term) {
+                return term.has(FeatureAtom::Kind::turn_on);
+              });
   }
   if (settle == 0 && longest > 0) {
     warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log{}; if it starts "

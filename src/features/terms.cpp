@@ -240,11 +240,8 @@ std::string FeatureTerm::name() const {
   return text;
 }
 
-bool FeatureTerm::uses_input() const {
-  for (const auto& factor : factors) {
-    if (factor.atom.kind == Kind::input) return true;
-  }
-  return false;
+bool FeatureTerm::has(Kind kind) const {
+  return std::any_of(factors.begin(), factors.end(), [kind](const FeatureFactor& factor) { return factor.atom.kind == kind; });
 }
 
 std::vector<double> FeatureTerm::time_constants() const {

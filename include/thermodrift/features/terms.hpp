@@ -102,7 +102,9 @@ struct FeatureTerm {
   std::string name() const;
   // The kind of a plain atom (one factor, power 1); Kind::input also for libsvm columns.
   bool is_atom(Kind kind) const { return factors.size() == 1 && factors[0].power == 1 && factors[0].atom.kind == kind; }
-  bool uses_input() const;
+  // Whether any factor is an atom of `kind`.
+  bool has(Kind kind) const;
+  bool uses_input() const { return has(Kind::input); }
   // The time constants (s) of its atoms, in order, with repeats.
   std::vector<double> time_constants() const;
   // The temperature channels (0-based) its grad atoms read, in order, with repeats.
