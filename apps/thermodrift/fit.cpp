@@ -55,6 +55,8 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
   request.folds = args.folds;
   request.tune_epsilon = args.tune_epsilon;
   if (app.count("--max-vectors")) request.max_vectors = args.max_vectors;
+  request.approximation = svr_approximation_from_string(args.kernel);
+  request.landmarks = args.landmarks;
   request.stop = stop;
   CalibrationOptions options = calibration_options(request);
   std::size_t axis_count = 1;
@@ -219,6 +221,15 @@ void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
   app.add_option("--max-vectors", args.max_vectors,
                   "at most K support vectors per axis: the reduced set fitted to the SVR (as compress does)")
       ->check(whole_number(1, std::size_t{1} << 20));
+  app.add_option("--kernel", args.kernel,
+                 fmt::format("SVR kernel matrix: exact (SMO), nystrom (a low-rank factor of at most --landmarks "
+                             "samples, for full-rate logs) or auto (default: exact up to {} samples per fit, "
+                             "nystrom beyond; docs/svr.md)",
+                             SvrOptions{}.exact_limit))
+      ->check(CLI::IsMember({"auto", "exact", "nystrom"}))
+      ->option_text("auto|exact|nystrom");
+  app.add_option("--landmarks", args.landmarks, "with the Nyström kernel: the factor's largest rank (default 512)")
+      ->check(whole_number(1, 100000));
   app.add_option("--seed", args.seed, "seed of the tuner's random choices")->check(kSeed);
   app.add_option("--threads", args.threads, "threads for tuning and the feature search (default: all cores); results do not depend on it")
       ->check(kThreads);

@@ -39,6 +39,8 @@ struct FitArguments {
   std::string folds_by = "time";
   bool tune_epsilon = false;
   std::size_t max_vectors = 0;
+  std::string kernel = "auto";
+  std::size_t landmarks = SvrOptions{}.landmarks;
   std::string out;
   bool json = false;
 };

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "svr_kernel.hpp"
+#include "svr_nystrom.hpp"
 #include "svr_solver.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/models/svr.hpp"
@@ -26,7 +27,24 @@ bool SvrOptions::IsValid(std::string* error) const {
     return fail(fmt::format("cache_mb must be a positive number, not {}", cache_mb));
   if (max_iterations < 1) return fail(fmt::format("max_iterations must be >= 1, not {}", max_iterations));
   if (threads < 1 || threads > 256) return fail(fmt::format("threads must be in 1..256, not {}", threads));
+  if (landmarks < 1) return fail("landmarks must be >= 1");
   return true;
+}
+
+const char* to_string(SvrApproximation approximation) {
+  switch (approximation) {
+    case SvrApproximation::automatic: return "auto";
+    case SvrApproximation::exact: return "exact";
+    case SvrApproximation::nystrom: return "nystrom";
+  }
+  return "unknown";
+}
+
+SvrApproximation svr_approximation_from_string(const std::string& text) {
+  for (const auto approximation : {SvrApproximation::automatic, SvrApproximation::exact, SvrApproximation::nystrom}) {
+    if (text == to_string(approximation)) return approximation;
+  }
+  throw UsageError(fmt::format("unknown kernel approximation '{}' (expected auto, exact or nystrom)", text));
 }
 
 const char* to_string(SvrTermination termination) {
@@ -68,6 +86,12 @@ Eigen::VectorXd RbfDecisionFunction::predict(const Eigen::MatrixXd& samples) con
 }
 
 std::string SvrSummary::BriefReport() const {
+  if (approximation == SvrApproximation::nystrom) {
+    return fmt::format("ε-SVR {} (Nyström, {} landmarks, mean kernel residual {:.2g}): {} Newton steps, dual objective {:.9g}, "
+                       "gradient norm {:.3g}, {} samples outside the tube, {:.3f} s",
+                       to_string(termination), landmarks, kernel_residual, iterations, dual_objective, max_violation,
+                       support_vectors, seconds);
+  }
   return fmt::format("ε-SVR {}: {} iterations, dual objective {:.9g}, max KKT violation {:.3g}, {} SV ({} at C), "
                      "{} kernel columns{}, {:.3f} s",
                      to_string(termination), iterations, dual_objective, max_violation, support_vectors,
@@ -111,6 +135,10 @@ SvrFit SvrTrainer::train(const SvrDataset& data, const Eigen::VectorXd& targets,
     throw UsageError("SVR: samples and targets must be finite numbers");
   }
   if (size > 1'000'000'000) throw UsageError("SVR: too many samples");
+  if (options_.approximation == SvrApproximation::nystrom ||
+      (options_.approximation == SvrApproximation::automatic && data.size() > options_.exact_limit)) {
+    return svr_detail::train_nystrom(data, targets, options_);
+  }
 
   svr_detail::WorkerPool pool(options_.threads);
   svr_detail::RbfKernel kernel(data, options_.gamma, pool);

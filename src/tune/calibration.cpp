@@ -271,6 +271,8 @@ CalibrationOptions calibration_options(const FitRequest& request) {
   options.svr.gamma = request.gamma ? *request.gamma : gamma_of_sigma(request.sigma.value_or(1.0));
   options.svr.epsilon = request.epsilon;
   options.svr.tolerance = request.tolerance;
+  options.svr.approximation = request.approximation;
+  options.svr.landmarks = request.landmarks;
   options.max_vectors = request.max_vectors;
   // The paper's method tunes C and σ; fixed values are used only when both are given.
   const bool fixed = request.C && (request.sigma || request.gamma);
@@ -399,7 +401,16 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     fitted.fit["solver"] = {{"termination", to_string(result.summary.termination)},
                             {"iterations", result.summary.iterations},
                             {"support_vectors", result.summary.support_vectors},
-                            {"dual_objective", result.summary.dual_objective}};
+                            {"dual_objective", result.summary.dual_objective},
+                            {"kernel", to_string(result.summary.approximation)}};
+    if (result.summary.approximation == SvrApproximation::nystrom) {
+      // The approximation and what it cost, for whoever reads the model: the factor's rank
+      // (the landmarks are the support vectors) and the kernel it leaves unexplained.
+      fitted.fit["solver"]["landmarks"] = result.summary.landmarks;
+      fitted.fit["solver"]["mean_kernel_residual"] = result.summary.kernel_residual;
+      fitted.fit["solver"]["samples_outside_tube"] = result.summary.support_vectors;
+      fitted.fit["solver"]["seconds"] = result.summary.seconds;
+    }
     fitted.fit["evaluations"] = evaluations;
     fitted.model = std::move(svr);
   }

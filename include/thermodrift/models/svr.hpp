@@ -28,6 +28,15 @@ namespace thermodrift {
 inline double gamma_of_sigma(double sigma) { return 1.0 / (2.0 * sigma * sigma); }
 inline double sigma_of_gamma(double gamma) { return std::sqrt(1.0 / (2.0 * gamma)); }
 
+// How a fit treats the kernel matrix: exactly (SMO on the n × n kernel, columns cached),
+// through a Nyström factor of rank ≤ `landmarks` (docs/svr.md, "Full-rate logs": for logs
+// the exact solver takes minutes or more on), or `automatic`: exact up to `exact_limit`
+// samples, Nyström beyond.
+enum class SvrApproximation { automatic, exact, nystrom };
+
+const char* to_string(SvrApproximation approximation);
+SvrApproximation svr_approximation_from_string(const std::string& text);  // throws UsageError
+
 struct SvrOptions {
   double C = 1.0;                 // penalty on points outside the tube (libsvm -c)
   double gamma = 0.5;             // RBF exp(-gamma ||x-x'||^2); gamma = 1/(2 sigma^2) (libsvm -g)
@@ -38,6 +47,9 @@ struct SvrOptions {
   long max_iterations = 400'000; // cap on SMO steps (~1 s of CPU at n = 2271, C = 1e4, γ = 100: docs/svr.md); reaching it gives SvrTermination::iteration_limit
   int threads = 1;                // threads for kernel columns inside one fit (used only for long columns)
   StopToken stop;                 // asked at the start of a fit and every 1000 SMO steps at most: throws Interrupted
+  SvrApproximation approximation = SvrApproximation::automatic;
+  std::size_t exact_limit = 30'000;  // automatic: the exact solver up to this many samples
+  std::size_t landmarks = 512;       // Nyström: the largest rank of the factor (its landmarks)
 
   // True when every field is usable; otherwise false with a one-line reason in *error.
   bool IsValid(std::string* error) const;
@@ -71,6 +83,9 @@ struct SvrSummary {
   std::size_t kernel_columns = 0;           // kernel columns computed (cache misses)
   bool warm_started = false;                // started from a previous fit's α
   double seconds = 0;                       // wall time of the fit
+  SvrApproximation approximation = SvrApproximation::exact;  // which solver ran (never automatic)
+  std::size_t landmarks = 0;                // Nyström: the factor's rank (= support vectors of the function)
+  double kernel_residual = 0;               // Nyström: mean of K(x,x) − φ(x)ᵀφ(x) over the samples (exact: 0)
 
   std::string BriefReport() const;  // one line
 };

@@ -87,6 +87,8 @@ struct FitRequest {
   int folds = 5;
   bool tune_epsilon = false;
   std::optional<std::size_t> max_vectors;
+  SvrApproximation approximation = SvrApproximation::automatic;  // the kernel: exact, Nyström, or by size
+  std::size_t landmarks = SvrOptions{}.landmarks;
   StopToken stop;
 };
 // Throws UsageError for sigma and gamma both given, an unknown tune method or objective,

@@ -2,6 +2,7 @@
 // behaviours the tuner relies on (warm start, cache budget, iteration cap).
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <random>
 
@@ -231,6 +232,98 @@ TEST(SvrTrainer, MismatchedOrEmptyDataIsAUsageError) {
   Eigen::MatrixXd samples = Eigen::MatrixXd::Zero(3, 2);
   samples(1, 1) = std::nan("");
   EXPECT_THROW(trainer.train(samples, Eigen::VectorXd::Zero(3)), UsageError);
+}
+
+// The Nyström fit for full-rate logs (src/models/svr_nystrom.hpp) against the exact
+// solver on the same samples: the primal objective of both functions, their predictions,
+// and when `automatic` takes which.
+SvrOptions kernel_case(double C, double gamma, SvrApproximation approximation) {
+  SvrOptions result;
+  result.C = C;
+  result.gamma = gamma;
+  result.epsilon = 0.1;
+  result.tolerance = 1e-5;
+  result.approximation = approximation;
+  return result;
+}
+
+// ½‖f‖²_H + C·Σ max(0, |y − f(x)| − ε): the problem both solvers minimize, judged on each
+// one's decision function (its RKHS norm from its own vectors and coefficients).
+double primal(const RbfDecisionFunction& f, const Data& data, const SvrOptions& settings) {
+  const Eigen::MatrixXd& v = f.support_vectors;
+  double norm = 0;
+  for (Eigen::Index a = 0; a < v.rows(); ++a) {
+    for (Eigen::Index b = 0; b < v.rows(); ++b) {
+      norm += f.coefficients(a) * f.coefficients(b) * std::exp(-f.gamma * (v.row(a) - v.row(b)).squaredNorm());
+    }
+  }
+  const Eigen::ArrayXd loss = ((data.targets - f.predict(data.samples)).array().abs() - settings.epsilon).max(0.0);
+  return 0.5 * norm + settings.C * loss.sum();
+}
+
+TEST(SvrNystrom, ReachesTheExactSolutionsObjective) {
+  const Data data = trajectory(1500, 3);
+  for (const auto& [C, gamma] : {std::pair{10.0, 2.0}, std::pair{215.0, 0.5}}) {
+    const SvrOptions exact_options = kernel_case(C, gamma, SvrApproximation::exact);
+    const SvrOptions nystrom_options = kernel_case(C, gamma, SvrApproximation::nystrom);
+    const SvrFit exact = SvrTrainer(exact_options).train(data.samples, data.targets);
+    const SvrFit nystrom = SvrTrainer(nystrom_options).train(data.samples, data.targets);
+    ASSERT_EQ(exact.summary.termination, SvrTermination::converged);
+    ASSERT_EQ(nystrom.summary.termination, SvrTermination::converged) << nystrom.summary.BriefReport();
+    EXPECT_EQ(nystrom.summary.approximation, SvrApproximation::nystrom);
+    // Two smooth features: the kernel is numerically of low rank, far below the budget.
+    EXPECT_LT(nystrom.summary.landmarks, nystrom_options.landmarks);
+    EXPECT_EQ(static_cast<std::size_t>(nystrom.function.support_vectors.rows()), nystrom.summary.landmarks);
+    EXPECT_LE(nystrom.summary.kernel_residual, 1e-6);
+    const double want = primal(exact.function, data, exact_options);
+    EXPECT_NEAR(primal(nystrom.function, data, nystrom_options), want, 1e-4 * want) << "C " << C;
+    const Eigen::VectorXd difference = exact.function.predict(data.samples) - nystrom.function.predict(data.samples);
+    EXPECT_LT(std::sqrt(difference.squaredNorm() / static_cast<double>(difference.size())), 5e-3) << "C " << C;
+  }
+}
+
+TEST(SvrNystrom, FewLandmarksAreAnApproximationNeverBetterThanTheOptimum) {
+  const Data data = trajectory(1000, 4);
+  SvrOptions settings = kernel_case(10, 8, SvrApproximation::nystrom);
+  settings.landmarks = 4;
+  const SvrFit nystrom = SvrTrainer(settings).train(data.samples, data.targets);
+  EXPECT_EQ(nystrom.function.support_vectors.rows(), 4);
+  EXPECT_GT(nystrom.summary.kernel_residual, 1e-3);  // four landmarks cannot hold a narrow kernel
+  const SvrOptions exact_options = kernel_case(10, 8, SvrApproximation::exact);
+  const SvrFit exact = SvrTrainer(exact_options).train(data.samples, data.targets);
+  // The function lies in the span of four landmarks' kernels, a subspace of the exact problem's.
+  const double optimum = primal(exact.function, data, exact_options);
+  EXPECT_GT(primal(nystrom.function, data, settings), optimum * 1.01);
+}
+
+TEST(SvrNystrom, AutomaticTakesItBeyondTheExactLimitOnly) {
+  for (const int count : {800, 1500}) {
+    const Data data = trajectory(count, 5);
+    SvrOptions settings = kernel_case(10, 2, SvrApproximation::automatic);
+    settings.exact_limit = 1000;
+    const SvrFit fit = SvrTrainer(settings).train(data.samples, data.targets);
+    EXPECT_EQ(fit.summary.approximation, count > 1000 ? SvrApproximation::nystrom : SvrApproximation::exact) << count;
+    // Only an exact fit keeps the dual solution a later fit may warm-start from.
+    EXPECT_EQ(fit.alpha.size(), count > 1000 ? 0 : count);
+  }
+}
+
+TEST(SvrNystrom, StopsWhenAsked) {
+  const Data data = trajectory(500, 6);
+  std::atomic<bool> stop{true};
+  SvrOptions settings = kernel_case(10, 2, SvrApproximation::nystrom);
+  settings.stop = StopToken(stop);
+  EXPECT_THROW(SvrTrainer(settings).train(data.samples, data.targets), Interrupted);
+}
+
+TEST(SvrNystrom, NamesParseBackAndUnknownOnesAreRefused) {
+  for (const auto approximation : {SvrApproximation::automatic, SvrApproximation::exact, SvrApproximation::nystrom}) {
+    EXPECT_EQ(svr_approximation_from_string(to_string(approximation)), approximation);
+  }
+  EXPECT_THROW(svr_approximation_from_string("fourier"), UsageError);
+  SvrOptions settings;
+  settings.landmarks = 0;
+  EXPECT_THROW(SvrTrainer{settings}, UsageError);
 }
 
 }  // namespace
