@@ -6,7 +6,8 @@
 //                                  [--evaluations N] [--training cycle|two-runs]
 //                                  [--folds-by time|runs] [--sensor drawn|coil]
 //                                  [--without turn-on,self-heating]
-//                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any] [--json FILE]
+//                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any]
+//                                  [--max-cancellation X] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
 // is the training log, cycle 2 the "next cycle". Two other profiles of two distinct
@@ -101,6 +102,7 @@ struct Arguments {
   std::vector<std::size_t> oracle_without;  // regressors the oracle leaves out (sim::law_regressor_names)
   std::optional<double> rate_span;          // --rate-span of the --features auto methods (fit's default if absent)
   bool other_channels = FeatureSelectionOptions{}.other_channels;  // --node-channel any|own
+  double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -131,6 +133,7 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--evaluations") args.evaluations = std::stol(value);
     else if (flag == "--json") args.json = value;
     else if (flag == "--rate-span") args.rate_span = std::stod(value);
+    else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
     else if (flag == "--node-channel" && (value == "own" || value == "any")) args.other_channels = value == "any";
     else if (flag == "--identify" && (value == "greedy" || value == "thermal-node")) {
       args.identify = value == "greedy" ? FeatureSelectionOptions::Method::greedy
@@ -426,6 +429,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       CalibrationOptions options = fit_options(method, args.evaluations);
       options.selection.method = args.identify;
       options.selection.other_channels = args.other_channels;
+      options.selection.max_cancellation = args.max_cancellation;
       options.folds_by = args.folds_by;
       if (args.rate_span && method != Method::paper) options.rate_span_seconds = args.rate_span;
       if (chooses_features(options)) {
