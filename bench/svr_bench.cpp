@@ -190,15 +190,7 @@ void nystrom_against_exact(int count, SvrOptions options) {
   const Data later = chamber_like(count + count / 4, 11);  // the same series, a quarter longer
   const Eigen::MatrixXd tail = later.samples.bottomRows(count / 4);
   auto primal = [&](const RbfDecisionFunction& f) {
-    const Eigen::MatrixXd& v = f.support_vectors;
-    double norm = 0;
-    for (Eigen::Index a = 0; a < v.rows(); ++a) {
-      for (Eigen::Index b = 0; b < v.rows(); ++b) {
-        norm += f.coefficients(a) * f.coefficients(b) * std::exp(-f.gamma * (v.row(a) - v.row(b)).squaredNorm());
-      }
-    }
-    const Eigen::VectorXd loss = ((data.targets - f.predict(data.samples)).array().abs() - options.epsilon).max(0.0);
-    return 0.5 * norm + options.C * loss.sum();
+    return f.primal_objective(data.samples, data.targets, options.C, options.epsilon);
   };
   options.approximation = SvrApproximation::exact;
   const SvrFit exact = SvrTrainer(options).train(data.samples, data.targets);

@@ -85,6 +85,22 @@ Eigen::VectorXd RbfDecisionFunction::predict(const Eigen::MatrixXd& samples) con
   return result;
 }
 
+double RbfDecisionFunction::primal_objective(const Eigen::MatrixXd& samples, const Eigen::VectorXd& targets,
+                                             double C, double epsilon) const {
+  if (samples.rows() != targets.size()) {
+    throw UsageError(fmt::format("primal objective: {} samples but {} targets", samples.rows(), targets.size()));
+  }
+  const Eigen::MatrixXd& v = support_vectors;
+  double norm = 0;
+  for (Eigen::Index a = 0; a < v.rows(); ++a) {
+    for (Eigen::Index b = 0; b < v.rows(); ++b) {
+      norm += coefficients(a) * coefficients(b) * std::exp(-gamma * (v.row(a) - v.row(b)).squaredNorm());
+    }
+  }
+  const Eigen::ArrayXd loss = ((targets - predict(samples)).array().abs() - epsilon).max(0.0);
+  return 0.5 * norm + C * loss.sum();
+}
+
 std::string SvrSummary::BriefReport() const {
   if (approximation == SvrApproximation::nystrom) {
     return fmt::format("ε-SVR {} (Nyström, {} landmarks, mean kernel residual {:.2g}): {} Newton steps, dual objective {:.9g}, "

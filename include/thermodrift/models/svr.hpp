@@ -71,6 +71,11 @@ struct RbfDecisionFunction {
 
   double operator()(const double* x) const;                       // x has support_vectors.cols() entries
   Eigen::VectorXd predict(const Eigen::MatrixXd& samples) const;  // one row per sample
+  // ½‖f‖²_H + C·Σ max(0, |y − f(x)| − ε) on (samples, targets): the problem every solver
+  // here minimizes, judged on this function (its RKHS norm from its own vectors), so fits
+  // by different solvers or approximations compare on one scale. O(vectors²) kernels.
+  double primal_objective(const Eigen::MatrixXd& samples, const Eigen::VectorXd& targets, double C,
+                          double epsilon) const;
 };
 
 struct SvrSummary {

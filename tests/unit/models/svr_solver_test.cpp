@@ -247,18 +247,9 @@ SvrOptions kernel_case(double C, double gamma, SvrApproximation approximation) {
   return result;
 }
 
-// ½‖f‖²_H + C·Σ max(0, |y − f(x)| − ε): the problem both solvers minimize, judged on each
-// one's decision function (its RKHS norm from its own vectors and coefficients).
+// The problem both solvers minimize, judged on each one's decision function.
 double primal(const RbfDecisionFunction& f, const Data& data, const SvrOptions& settings) {
-  const Eigen::MatrixXd& v = f.support_vectors;
-  double norm = 0;
-  for (Eigen::Index a = 0; a < v.rows(); ++a) {
-    for (Eigen::Index b = 0; b < v.rows(); ++b) {
-      norm += f.coefficients(a) * f.coefficients(b) * std::exp(-f.gamma * (v.row(a) - v.row(b)).squaredNorm());
-    }
-  }
-  const Eigen::ArrayXd loss = ((data.targets - f.predict(data.samples)).array().abs() - settings.epsilon).max(0.0);
-  return 0.5 * norm + settings.C * loss.sum();
+  return f.primal_objective(data.samples, data.targets, settings.C, settings.epsilon);
 }
 
 TEST(SvrNystrom, ReachesTheExactSolutionsObjective) {
