@@ -3,6 +3,8 @@
 //   build/bin/tune_bench [--evaluations N] [--grid-evaluations N] [--threads N]
 //                        [--objective cv|holdout|train] [--methods afsa,grid,random]
 //                        [--search-tolerance T] [--search-max-iterations N] [--seed S]
+//                        [--kernel auto|exact] [--low-rank-landmarks N]
+//   build/bin/tune_bench --points C:SIGMA,...
 //
 // The default simulated test (two chamber cycles, 1 Hz, three axes). For each axis the
 // project's pipeline (smoothing 100 s, dT/dt over 100 s, every 10th sample) gives
@@ -10,13 +12,17 @@
 // standardized; each method tunes (C, σ) by blocked 5-fold CV on cycle 1 only, the
 // tuned point is refitted at the solver's normal tolerance on all of cycle 1, and the
 // model predicts every ready sample of cycle 2. Prints per method and axis: the tuning
-// objective and the held-out MSE in (°/h)², evaluations, fits, seconds; then totals.
-// docs/tuning.md has measured figures.
+// objective and the held-out MSE in (°/h)², evaluations, fits (capped at the search's SMO
+// step cap, solved through a low-rank factor), seconds; then totals. With --points, no
+// tuning: each (C, σ) is fitted on all of cycle 1 as the search fits it (SMO with the
+// search's tolerance and cap; the low-rank path) and by SMO to a 1e-5 tolerance, and the
+// ε-SVR primal objective of each function is printed. docs/tuning.md has measured figures.
 #include <time.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -49,6 +55,9 @@ struct Arguments {
   std::vector<TuneMethod> methods{TuneMethod::afsa, TuneMethod::grid, TuneMethod::random};
   double search_tolerance = -1;      // < 0: the library default
   long search_max_iterations = -1;   // < 0: the library default
+  bool low_rank = true;              // --kernel auto (the default) or exact: SMO for every fit
+  std::size_t low_rank_landmarks = 0;  // 0: the library default
+  std::vector<std::pair<double, double>> points;  // --points C:sigma,...: the search's fits judged instead
 };
 
 Arguments parse(int argc, char** argv) {
@@ -69,6 +78,23 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--objective") args.objective = parse_tune_objective(value());
     else if (flag == "--search-tolerance") args.search_tolerance = std::stod(value());
     else if (flag == "--search-max-iterations") args.search_max_iterations = std::stol(value());
+    else if (flag == "--kernel") args.low_rank = value() != "exact";
+    else if (flag == "--low-rank-landmarks") args.low_rank_landmarks = std::stoul(value());
+    else if (flag == "--points") {
+      const std::string list = value();
+      std::size_t begin = 0;
+      while (begin < list.size()) {
+        const std::size_t end = std::min(list.find(',', begin), list.size());
+        const std::string point = list.substr(begin, end - begin);
+        const std::size_t colon = point.find(':');
+        if (colon == std::string::npos) {
+          fmt::print(stderr, "--points: expected C:sigma, got '{}'\n", point);
+          std::exit(2);
+        }
+        args.points.emplace_back(std::stod(point.substr(0, colon)), std::stod(point.substr(colon + 1)));
+        begin = end + 1;
+      }
+    }
     else if (flag == "--methods") {
       args.methods.clear();
       const std::string list = value();
@@ -126,12 +152,14 @@ struct Row {
   long evaluations = 0;
   long fits = 0;
   long capped = 0;
+  long low_rank = 0;
   double seconds = 0;
   double cpu_seconds = 0;
   double C = 0, sigma = 0;
+  double converged_dph2 = 0;  // the CV objective at the tuned point with every fit converged
 };
 
-Row run_method(const AxisData& data, TuneMethod method, const Arguments& args) {
+Row run_method(const AxisData& data, TuneMethod method, const Arguments& args, bool low_rank) {
   SvrTuningOptions options;
   options.method = method;
   options.objective = args.objective;
@@ -140,6 +168,8 @@ Row run_method(const AxisData& data, TuneMethod method, const Arguments& args) {
   options.seed = args.seed;
   if (args.search_tolerance >= 0) options.search_tolerance = args.search_tolerance;
   if (args.search_max_iterations >= 0) options.search_max_iterations = args.search_max_iterations;
+  options.solver.approximation = low_rank ? SvrApproximation::automatic : SvrApproximation::exact;
+  if (args.low_rank_landmarks > 0) options.solver.low_rank_landmarks = args.low_rank_landmarks;
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = process_cpu_seconds();
   const Eigen::MatrixXd samples = data.scaling.features(data.training.features);
@@ -157,10 +187,18 @@ Row run_method(const AxisData& data, TuneMethod method, const Arguments& args) {
   row.evaluations = tuned.evaluations;
   row.fits = tuned.fits;
   row.capped = tuned.capped_fits;
+  row.low_rank = tuned.low_rank_fits;
   row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   row.cpu_seconds = process_cpu_seconds() - cpu_start;
   row.C = tuned.C;
   row.sigma = tuned.sigma;
+  // What the search's figure stands for: the same CV at the tuned point, every fit
+  // converged (SMO to 1e-5, or exact through the low-rank factor where that holds it).
+  SvrTuningOptions converged = options;
+  converged.search_tolerance = 1e-5;
+  converged.search_max_iterations = 5'000'000;
+  converged.solver.approximation = SvrApproximation::automatic;
+  row.converged_dph2 = SvrObjective(samples, targets, converged)(tuned.C, tuned.sigma, tuned.epsilon) * scale2;
   return row;
 }
 
@@ -184,28 +222,87 @@ int main(int argc, char** argv) {
              args.threads);
   fmt::print("noise floor after 100 s smoothing, (°/h)²: x {:.3g}  y {:.3g}  z {:.3g}\n\n", floor[0], floor[1],
              floor[2]);
-  fmt::print("{:<7} {:<4} {:>10} {:>9} {:>12} {:>12} {:>6} {:>6} {:>7} {:>8} {:>8}\n", "method", "axis", "C", "sigma",
-             "tune MSE", "held-out MSE", "evals", "fits", "capped", "seconds", "cpu s");
+  fmt::print("{:<18} {:<4} {:>10} {:>9} {:>12} {:>12} {:>12} {:>6} {:>6} {:>7} {:>8} {:>8} {:>8}\n", "method", "axis", "C",
+             "sigma", "tune MSE", "converged", "held-out MSE", "evals", "fits", "capped", "low-rank", "seconds", "cpu s");
   const char* names[] = {"x", "y", "z"};
-  for (TuneMethod method : args.methods) {
+  if (!args.points.empty()) {
+    // Each point fitted on all of cycle 1 three ways; the ε-SVR primal objective of each
+    // function says how far from the optimum the search's fits are.
+    fmt::print("primal objective ½‖f‖² + C·Σ max(0, |y − f| − ε) on cycle 1 (ε = 0.01), and seconds:\n");
+    fmt::print("{:<4} {:>8} {:>7} {:>26} {:>30} {:>26}\n", "axis", "C", "sigma", "search SMO (capped)",
+               "search low-rank (landmarks)", "SMO to 1e-5");
+    for (std::size_t a = 0; a < axes.size(); ++a) {
+      const Eigen::MatrixXd samples = axes[a].scaling.features(axes[a].training.features);
+      const Eigen::VectorXd targets = axes[a].scaling.target(axes[a].training.target);
+      const SvrTuningOptions defaults;
+      for (const auto& [C, sigma] : args.points) {
+        SvrOptions search;
+        search.C = C;
+        search.gamma = gamma_of_sigma(sigma);
+        search.epsilon = defaults.epsilon;
+        search.tolerance = defaults.search_tolerance;
+        search.max_iterations = defaults.search_max_iterations;
+        search.approximation = SvrApproximation::exact;
+        SvrOptions low_rank = search;
+        low_rank.approximation = SvrApproximation::low_rank;
+        SvrOptions converged = search;
+        converged.tolerance = 1e-5;
+        converged.max_iterations = 50'000'000;
+        auto run = [&](const SvrOptions& options) {
+          const SvrFit fit = SvrTrainer(options).train(samples, targets);
+          const bool factored = fit.summary.approximation == SvrApproximation::nystrom;
+          return fmt::format("{:.7g} {:.3f} s{}", fit.function.primal_objective(samples, targets, C, search.epsilon),
+                             fit.summary.seconds,
+                             factored ? fmt::format(" ({})", fit.summary.landmarks)
+                                      : fit.summary.termination == SvrTermination::converged ? "" : " capped");
+        };
+        fmt::print("{:<4} {:>8.4g} {:>7.4g} {:>26} {:>30} {:>26}\n", names[a], C, sigma, run(search), run(low_rank),
+                   run(converged));
+        std::fflush(stdout);
+      }
+    }
+    return 0;
+  }
+  // Each method as asked; AFSA once more with every fit by SMO (`--kernel exact`, the state before
+  // the low-rank fits, docs/tuning.md) for the ratio, in the same run.
+  std::vector<std::pair<TuneMethod, bool>> runs;
+  for (const TuneMethod method : args.methods) runs.emplace_back(method, args.low_rank);
+  for (const TuneMethod method : args.methods) {
+    if (method == TuneMethod::afsa && args.low_rank) runs.emplace_back(method, false);
+  }
+  double afsa_cpu[2] = {0, 0}, afsa_wall[2] = {0, 0};
+  for (const auto& [method, low_rank] : runs) {
+    const std::string label = fmt::format("{}{}", to_string(method), low_rank ? "" : " (SMO only)");
     Row total;
     for (std::size_t a = 0; a < axes.size(); ++a) {
-      const Row row = run_method(axes[a], method, args);
-      fmt::print("{:<7} {:<4} {:>10.4g} {:>9.4g} {:>12.4g} {:>12.4g} {:>6} {:>6} {:>7} {:>8.2f} {:>8.2f}\n",
-                 to_string(method), names[a], row.C, row.sigma, row.objective_dph2, row.held_out_mse,
-                 row.evaluations, row.fits, row.capped, row.seconds, row.cpu_seconds);
+      const Row row = run_method(axes[a], method, args, low_rank);
+      fmt::print("{:<18} {:<4} {:>10.4g} {:>9.4g} {:>12.4g} {:>12.4g} {:>12.4g} {:>6} {:>6} {:>7} {:>8} {:>8.2f} {:>8.2f}\n",
+                 label, names[a], row.C, row.sigma, row.objective_dph2, row.converged_dph2, row.held_out_mse,
+                 row.evaluations, row.fits, row.capped, row.low_rank, row.seconds, row.cpu_seconds);
       total.objective_dph2 += row.objective_dph2;
+      total.converged_dph2 += row.converged_dph2;
       total.held_out_mse += row.held_out_mse;
       total.evaluations += row.evaluations;
       total.fits += row.fits;
       total.capped += row.capped;
+      total.low_rank += row.low_rank;
       total.seconds += row.seconds;
       total.cpu_seconds += row.cpu_seconds;
     }
-    fmt::print("{:<7} {:<4} {:>10} {:>9} {:>12.4g} {:>12.4g} {:>6} {:>6} {:>7} {:>8.2f} {:>8.2f}\n\n",
-               to_string(method), "all", "", "", total.objective_dph2, total.held_out_mse, total.evaluations,
-               total.fits, total.capped, total.seconds, total.cpu_seconds);
+    fmt::print("{:<18} {:<4} {:>10} {:>9} {:>12.4g} {:>12.4g} {:>12.4g} {:>6} {:>6} {:>7} {:>8} {:>8.2f} {:>8.2f}\n\n",
+               label, "all", "", "", total.objective_dph2, total.converged_dph2, total.held_out_mse,
+               total.evaluations, total.fits, total.capped, total.low_rank, total.seconds, total.cpu_seconds);
+    if (method == TuneMethod::afsa) {
+      afsa_cpu[low_rank ? 1 : 0] = total.cpu_seconds;
+      afsa_wall[low_rank ? 1 : 0] = total.seconds;
+    }
     std::fflush(stdout);
+  }
+  if (afsa_cpu[0] > 0 && afsa_cpu[1] > 0) {
+    fmt::print("afsa, low-rank fits against SMO only: {:.2f}x less CPU ({:.2f} → {:.2f} s), "
+               "{:.2f}x less wall time ({:.2f} → {:.2f} s)\n",
+               afsa_cpu[0] / afsa_cpu[1], afsa_cpu[0], afsa_cpu[1], afsa_wall[0] / afsa_wall[1], afsa_wall[0],
+               afsa_wall[1]);
   }
   return 0;
 }

@@ -223,9 +223,10 @@ void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
       ->check(whole_number(1, std::size_t{1} << 20));
   app.add_option("--kernel", args.kernel,
                  fmt::format("SVR kernel matrix: exact (SMO), nystrom (a low-rank factor of at most --landmarks "
-                             "samples, for full-rate logs) or auto (default: exact up to {} samples per fit, "
+                             "samples, for full-rate logs) or auto (default: up to {} samples per fit the exact fit, "
+                             "through a factor of rank <= {} when the kernel matrix has one, by SMO otherwise; "
                              "nystrom beyond; docs/svr.md)",
-                             SvrOptions{}.exact_limit))
+                             SvrOptions{}.exact_limit, SvrOptions{}.low_rank_landmarks))
       ->check(CLI::IsMember({"auto", "exact", "nystrom"}))
       ->option_text("auto|exact|nystrom");
   app.add_option("--landmarks", args.landmarks, "with the Nyström kernel: the factor's largest rank (default 512)")

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 #include <vector>
-#include <vector>
 
 #include <fmt/format.h>
 
@@ -19,6 +18,7 @@ struct Factor {
   Eigen::MatrixXd rows;            // n × r: φ_i = rows.row(i), K ≈ rows·rowsᵀ
   std::vector<Eigen::Index> pivots;  // the landmarks, in the order taken
   double mean_residual = 0;        // trace(K − rows·rowsᵀ) / n
+  double largest_residual = 0;     // max of K(x,x) − φ(x)ᵀφ(x) over the samples
 };
 
 // Pivoted Cholesky of the RBF kernel matrix, never forming it: one kernel column per landmark.
@@ -35,7 +35,7 @@ Factor pivoted_cholesky(const SvrDataset& data, const SvrOptions& options, Worke
     if (rank % 16 == 0) options.stop.throw_if_requested("SVR fit (Nyström landmarks)");
     Eigen::Index pivot = 0;
     const double largest = residual.maxCoeff(&pivot);  // the first of equal residuals
-    if (!(largest > kResidualFloor)) break;
+    if (!(largest > options.landmark_residual)) break;
     kernel.column(static_cast<std::size_t>(pivot), 0, static_cast<std::size_t>(n), column.data());
     if (rank > 0) column.noalias() -= factor.rows.leftCols(rank) * factor.rows.row(pivot).head(rank).transpose();
     column /= std::sqrt(largest);
@@ -46,6 +46,7 @@ Factor pivoted_cholesky(const SvrDataset& data, const SvrOptions& options, Worke
   }
   factor.rows.conservativeResize(n, rank);
   factor.mean_residual = residual.cwiseMax(0.0).mean();
+  factor.largest_residual = std::max(0.0, residual.maxCoeff());
   return factor;
 }
 
@@ -70,17 +71,21 @@ LinearPrimal solve_linear_primal(const Eigen::MatrixXd& phi, const Eigen::Vector
   LinearPrimal result;
   result.v = Eigen::VectorXd::Zero(r + 1);
   result.v(r) = y.mean();
-  auto value = [&](const Eigen::VectorXd& v, double delta) {
-    const Eigen::ArrayXd u = (y - x * v).array().abs() - epsilon;
+  // The smoothed objective from the residuals y − x·v: a trial step's residuals are the
+  // current ones minus the step times x·direction, one product per direction however many
+  // step lengths are tried (the products with x were most of the fit's time).
+  auto value = [&](const Eigen::VectorXd& v, const Eigen::VectorXd& residual, double delta) {
+    const Eigen::ArrayXd u = residual.array().abs() - epsilon;
     const Eigen::ArrayXd loss = (u <= 0).select(0.0, (u < delta).select(u.square() / (2 * delta), u - delta / 2));
     return 0.5 * v.head(r).squaredNorm() + C * loss.sum();
   };
   result.converged = true;
+  Eigen::VectorXd residual(n), trial_residual(n), moved_by(n);
   for (double delta = 1.0; delta >= 1e-8 * 0.999; delta /= 10) {
+    residual.noalias() = y - x * result.v;  // afresh at each width: no drift from the updates
     bool settled = false;
     for (int step = 0; step < kMaxNewtonSteps && !settled; ++step) {
       options.stop.throw_if_requested("SVR fit (Nyström)");
-      const Eigen::VectorXd residual = y - x * result.v;
       Eigen::VectorXd gradient = Eigen::VectorXd::Zero(r + 1);
       gradient.head(r) = result.v.head(r);
       Eigen::MatrixXd hessian = Eigen::MatrixXd::Identity(r + 1, r + 1);
@@ -110,7 +115,7 @@ LinearPrimal solve_linear_primal(const Eigen::MatrixXd& phi, const Eigen::Vector
       ++result.steps;
       // Newton's step, damped (Levenberg) when it does not descend: the hinge is piecewise
       // linear beyond δ, where the curvature the step assumes is only that of the penalty.
-      const double before = value(result.v, delta);
+      const double before = value(result.v, residual, delta);
       bool moved = false;
       for (double damping = 0; damping <= 1e12 && !moved; damping = std::max(1e-6, damping * 100)) {
         const Eigen::MatrixXd damped = hessian + damping * Eigen::MatrixXd::Identity(r + 1, r + 1);
@@ -122,10 +127,13 @@ LinearPrimal solve_linear_primal(const Eigen::MatrixXd& phi, const Eigen::Vector
           if (settled) break;
           continue;
         }
+        moved_by.noalias() = x * direction;
         for (double length = 1; length > 1e-3; length /= 2) {
           const Eigen::VectorXd trial = result.v + length * direction;
-          if (value(trial, delta) <= before - 1e-4 * length * decrement) {
+          trial_residual = residual - length * moved_by;
+          if (value(trial, trial_residual, delta) <= before - 1e-4 * length * decrement) {
             result.v = trial;
+            residual.swap(trial_residual);
             moved = true;
             break;
           }
@@ -141,12 +149,8 @@ LinearPrimal solve_linear_primal(const Eigen::MatrixXd& phi, const Eigen::Vector
   return result;
 }
 
-}  // namespace
-
-SvrFit train_nystrom(const SvrDataset& data, const Eigen::VectorXd& targets, const SvrOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  WorkerPool pool(options.threads);
-  const Factor factor = pivoted_cholesky(data, options, pool);
+SvrFit fit_on_factor(const SvrDataset& data, const Eigen::VectorXd& targets, const SvrOptions& options,
+                     const Factor& factor, std::chrono::steady_clock::time_point start) {
   const auto rank = static_cast<Eigen::Index>(factor.pivots.size());
   const LinearPrimal primal = solve_linear_primal(factor.rows, targets, options);
 
@@ -176,6 +180,28 @@ SvrFit train_nystrom(const SvrDataset& data, const Eigen::VectorXd& targets, con
   summary.kernel_residual = factor.mean_residual;
   fit.C = options.C;  // no α: a Nyström fit does not warm-start another
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return fit;
+}
+
+}  // namespace
+
+SvrFit train_nystrom(const SvrDataset& data, const Eigen::VectorXd& targets, const SvrOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  WorkerPool pool(options.threads);
+  return fit_on_factor(data, targets, options, pivoted_cholesky(data, options, pool), start);
+}
+
+std::optional<SvrFit> train_low_rank(const SvrDataset& data, const Eigen::VectorXd& targets,
+                                     const SvrOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  WorkerPool pool(options.threads);
+  SvrOptions probe = options;
+  probe.landmarks = options.low_rank_landmarks;
+  probe.landmark_residual = options.low_rank_residual;
+  const Factor factor = pivoted_cholesky(data, probe, pool);
+  if (factor.largest_residual > probe.landmark_residual) return std::nullopt;
+  SvrFit fit = fit_on_factor(data, targets, probe, factor, start);
+  fit.summary.approximation = SvrApproximation::low_rank;
   return fit;
 }
 

@@ -4,7 +4,7 @@
 // The kernel matrix is replaced by a low-rank factor from a pivoted (incomplete)
 // Cholesky factorization, K ≈ L Lᵀ with L of n × r: each step takes as a landmark the
 // sample whose kernel the landmarks so far explain least (the largest residual of the
-// diagonal), until r reaches `landmarks` or every residual is below kResidualFloor.
+// diagonal), until r reaches `landmarks` or every residual is below `landmark_residual`.
 // Then φ_i = L_i is a finite feature map, exact on the landmarks, and the ε-SVR becomes
 // a linear ε-SVR in r + 1 unknowns (w, b), solved in the primal by Newton's method on the
 // ε-insensitive loss smoothed over a width δ shrunk to 10⁻⁸ (coordinate descent in the
@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 
 #include <Eigen/Dense>
 
@@ -23,8 +24,6 @@
 
 namespace thermodrift::svr_detail {
 
-// A kernel residual below this (K(x, x) = 1) counts as explained: no further landmark.
-inline constexpr double kResidualFloor = 1e-6;
 // Newton steps per smoothing width before the fit stops as iteration_limit.
 inline constexpr int kMaxNewtonSteps = 100;
 
@@ -33,5 +32,11 @@ inline constexpr int kMaxNewtonSteps = 100;
 // objective ½‖w‖² + C·Σ max(0, |y − f| − ε) (equal to the dual's at the optimum, as libsvm's
 // "obj"), `summary.support_vectors` the samples outside the tube.
 SvrFit train_nystrom(const SvrDataset& data, const Eigen::VectorXd& targets, const SvrOptions& options);
+
+// The same fit when at most `low_rank_landmarks` landmarks explain every sample's kernel
+// to within `low_rank_residual` (then it is the exact fit; summary.approximation says
+// low_rank); otherwise nothing (the factor's cost, r kernel columns, is lost).
+std::optional<SvrFit> train_low_rank(const SvrDataset& data, const Eigen::VectorXd& targets,
+                                     const SvrOptions& options);
 
 }  // namespace thermodrift::svr_detail

@@ -28,6 +28,13 @@ bool SvrOptions::IsValid(std::string* error) const {
   if (max_iterations < 1) return fail(fmt::format("max_iterations must be >= 1, not {}", max_iterations));
   if (threads < 1 || threads > 256) return fail(fmt::format("threads must be in 1..256, not {}", threads));
   if (landmarks < 1) return fail("landmarks must be >= 1");
+  if (!(std::isfinite(landmark_residual) && landmark_residual > 0 && landmark_residual < 1)) {
+    return fail(fmt::format("landmark_residual must be in (0, 1), not {}", landmark_residual));
+  }
+  if (low_rank_landmarks < 1) return fail("low_rank_landmarks must be >= 1");
+  if (!(std::isfinite(low_rank_residual) && low_rank_residual > 0 && low_rank_residual < 1)) {
+    return fail(fmt::format("low_rank_residual must be in (0, 1), not {}", low_rank_residual));
+  }
   return true;
 }
 
@@ -36,15 +43,17 @@ const char* to_string(SvrApproximation approximation) {
     case SvrApproximation::automatic: return "auto";
     case SvrApproximation::exact: return "exact";
     case SvrApproximation::nystrom: return "nystrom";
+    case SvrApproximation::low_rank: return "low-rank";
   }
   return "unknown";
 }
 
 SvrApproximation svr_approximation_from_string(const std::string& text) {
-  for (const auto approximation : {SvrApproximation::automatic, SvrApproximation::exact, SvrApproximation::nystrom}) {
+  for (const auto approximation : {SvrApproximation::automatic, SvrApproximation::exact, SvrApproximation::nystrom,
+                                   SvrApproximation::low_rank}) {
     if (text == to_string(approximation)) return approximation;
   }
-  throw UsageError(fmt::format("unknown kernel approximation '{}' (expected auto, exact or nystrom)", text));
+  throw UsageError(fmt::format("unknown kernel approximation '{}' (expected auto, exact, nystrom or low-rank)", text));
 }
 
 const char* to_string(SvrTermination termination) {
@@ -102,10 +111,11 @@ double RbfDecisionFunction::primal_objective(const Eigen::MatrixXd& samples, con
 }
 
 std::string SvrSummary::BriefReport() const {
-  if (approximation == SvrApproximation::nystrom) {
-    return fmt::format("ε-SVR {} (Nyström, {} landmarks, mean kernel residual {:.2g}): {} Newton steps, dual objective {:.9g}, "
+  if (approximation == SvrApproximation::nystrom || approximation == SvrApproximation::low_rank) {
+    return fmt::format("ε-SVR {} ({}, {} landmarks, mean kernel residual {:.2g}): {} Newton steps, dual objective {:.9g}, "
                        "gradient norm {:.3g}, {} samples outside the tube, {:.3f} s",
-                       to_string(termination), landmarks, kernel_residual, iterations, dual_objective, max_violation,
+                       to_string(termination), approximation == SvrApproximation::low_rank ? "low rank" : "Nyström",
+                       landmarks, kernel_residual, iterations, dual_objective, max_violation,
                        support_vectors, seconds);
   }
   return fmt::format("ε-SVR {}: {} iterations, dual objective {:.9g}, max KKT violation {:.3g}, {} SV ({} at C), "
@@ -155,6 +165,11 @@ SvrFit SvrTrainer::train(const SvrDataset& data, const Eigen::VectorXd& targets,
       (options_.approximation == SvrApproximation::automatic && data.size() > options_.exact_limit)) {
     return svr_detail::train_nystrom(data, targets, options_);
   }
+  const bool warm = warm_start && warm_start->alpha.size() > 0;
+  if (!warm && (options_.approximation == SvrApproximation::low_rank ||
+                options_.approximation == SvrApproximation::automatic)) {
+    if (auto fit = svr_detail::train_low_rank(data, targets, options_)) return std::move(*fit);
+  }
 
   svr_detail::WorkerPool pool(options_.threads);
   svr_detail::RbfKernel kernel(data, options_.gamma, pool);
@@ -168,8 +183,7 @@ SvrFit SvrTrainer::train(const SvrDataset& data, const Eigen::VectorXd& targets,
   settings.stop = options_.stop;
 
   svr_detail::SmoSolution solution;
-  bool warm = false;
-  if (warm_start && warm_start->alpha.size() > 0) {
+  if (warm) {
     if (warm_start->alpha.size() != size || warm_start->alpha_star.size() != size || !(warm_start->C > 0)) {
       throw UsageError(fmt::format("SVR warm start comes from {} samples, this fit has {}",
                                    warm_start->alpha.size(), size));
@@ -179,7 +193,6 @@ SvrFit SvrTrainer::train(const SvrDataset& data, const Eigen::VectorXd& targets,
     const Eigen::VectorXd alpha = (warm_start->alpha * scale).cwiseMax(0.0).cwiseMin(options_.C);
     const Eigen::VectorXd alpha_star = (warm_start->alpha_star * scale).cwiseMax(0.0).cwiseMin(options_.C);
     solution = svr_detail::solve_svr_dual(targets, settings, kernel, cache, pool, &alpha, &alpha_star);
-    warm = true;
   } else {
     solution = svr_detail::solve_svr_dual(targets, settings, kernel, cache, pool);
   }

@@ -403,13 +403,14 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                             {"support_vectors", result.summary.support_vectors},
                             {"dual_objective", result.summary.dual_objective},
                             {"kernel", to_string(result.summary.approximation)}};
-    if (result.summary.approximation == SvrApproximation::nystrom) {
-      // The approximation and what it cost, for whoever reads the model: the factor's rank
-      // (the landmarks are the support vectors) and the kernel it leaves unexplained.
+    if (result.summary.approximation == SvrApproximation::nystrom ||
+        result.summary.approximation == SvrApproximation::low_rank) {
+      // The factor and what it cost, for whoever reads the model: its rank (the landmarks
+      // are the support vectors) and the kernel it leaves unexplained (low rank: none that
+      // counts, the fit is the exact one).
       fitted.fit["solver"]["landmarks"] = result.summary.landmarks;
       fitted.fit["solver"]["mean_kernel_residual"] = result.summary.kernel_residual;
       fitted.fit["solver"]["samples_outside_tube"] = result.summary.support_vectors;
-      fitted.fit["solver"]["seconds"] = result.summary.seconds;
     }
     fitted.fit["evaluations"] = evaluations;
     fitted.model = std::move(svr);

@@ -218,6 +218,7 @@ struct SvrObjective::State {
   SvrOptions search;  // solver settings of every search fit; C, gamma, epsilon set per point
   mutable std::atomic<long> fits{0};
   mutable std::atomic<long> capped_fits{0};
+  mutable std::atomic<long> low_rank_fits{0};
 };
 
 SvrObjective::SvrObjective(const Eigen::MatrixXd& samples, const Eigen::VectorXd& targets,
@@ -293,6 +294,9 @@ double SvrObjective::operator()(double C, double sigma, double epsilon) const {
     if (fit.summary.termination == SvrTermination::iteration_limit) {
       state_->capped_fits.fetch_add(1, std::memory_order_relaxed);
     }
+    if (fit.summary.approximation == SvrApproximation::low_rank) {
+      state_->low_rank_fits.fetch_add(1, std::memory_order_relaxed);
+    }
     const bool in_sample = split.scoring_samples.rows() == 0;
     const Eigen::MatrixXd& scored = in_sample ? split.training.samples() : split.scoring_samples;
     const Eigen::VectorXd& truth = in_sample ? split.training_targets : split.scoring_targets;
@@ -303,6 +307,7 @@ double SvrObjective::operator()(double C, double sigma, double epsilon) const {
 
 long SvrObjective::fits() const { return state_->fits.load(); }
 long SvrObjective::capped_fits() const { return state_->capped_fits.load(); }
+long SvrObjective::low_rank_fits() const { return state_->low_rank_fits.load(); }
 
 // ---------------------------------------------------------------------------------------
 // The search.
@@ -374,6 +379,7 @@ SvrTuningResult tune_svr(const Eigen::MatrixXd& samples, const Eigen::VectorXd& 
   result.evaluations = run.evaluations;
   result.fits = scorer.fits();
   result.capped_fits = scorer.capped_fits();
+  result.low_rank_fits = scorer.low_rank_fits();
   result.history = std::move(run.history);
   result.termination = run.termination;
   result.solver = options.solver;

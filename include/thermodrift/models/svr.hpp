@@ -28,11 +28,17 @@ namespace thermodrift {
 inline double gamma_of_sigma(double sigma) { return 1.0 / (2.0 * sigma * sigma); }
 inline double sigma_of_gamma(double gamma) { return std::sqrt(1.0 / (2.0 * gamma)); }
 
-// How a fit treats the kernel matrix: exactly (SMO on the n × n kernel, columns cached),
-// through a Nyström factor of rank ≤ `landmarks` (docs/svr.md, "Full-rate logs": for logs
-// the exact solver takes minutes or more on), or `automatic`: exact up to `exact_limit`
-// samples, Nyström beyond.
-enum class SvrApproximation { automatic, exact, nystrom };
+// How a fit treats the kernel matrix:
+// - `exact`: SMO on the n × n kernel, columns cached;
+// - `nystrom`: through a Nyström factor of rank ≤ `landmarks` (docs/svr.md, "Full-rate
+//   logs": for logs the exact solver takes minutes or more on);
+// - `low_rank`: through a pivoted-Cholesky factor when the kernel matrix *is* of rank
+//   ≤ `low_rank_landmarks` to within `low_rank_residual` (the factor then loses nothing:
+//   the fit is the exact one, found in the primal), by SMO otherwise. Wide kernels on few
+//   features are of low rank, and there SMO needs 10⁵-10⁶ steps at large C (docs/svr.md);
+// - `automatic` (the default): `low_rank` up to `exact_limit` samples, `nystrom` beyond.
+// A fit's summary says which ran (exact, nystrom or low_rank).
+enum class SvrApproximation { automatic, exact, nystrom, low_rank };
 
 const char* to_string(SvrApproximation approximation);
 SvrApproximation svr_approximation_from_string(const std::string& text);  // throws UsageError
@@ -50,6 +56,9 @@ struct SvrOptions {
   SvrApproximation approximation = SvrApproximation::automatic;
   std::size_t exact_limit = 30'000;  // automatic: the exact solver up to this many samples
   std::size_t landmarks = 512;       // Nyström: the largest rank of the factor (its landmarks)
+  double landmark_residual = 1e-6;   // Nyström: no landmark once every K(x,x) − φ(x)ᵀφ(x) is below this
+  std::size_t low_rank_landmarks = 64;  // low_rank: the largest rank taken for a complete factor
+  double low_rank_residual = 1e-12;     // low_rank: the residual below which the factor counts as complete
 
   // True when every field is usable; otherwise false with a one-line reason in *error.
   bool IsValid(std::string* error) const;
@@ -89,8 +98,8 @@ struct SvrSummary {
   bool warm_started = false;                // started from a previous fit's α
   double seconds = 0;                       // wall time of the fit
   SvrApproximation approximation = SvrApproximation::exact;  // which solver ran (never automatic)
-  std::size_t landmarks = 0;                // Nyström: the factor's rank (= support vectors of the function)
-  double kernel_residual = 0;               // Nyström: mean of K(x,x) − φ(x)ᵀφ(x) over the samples (exact: 0)
+  std::size_t landmarks = 0;                // Nyström, low rank: the factor's rank (= support vectors of the function)
+  double kernel_residual = 0;               // Nyström, low rank: mean of K(x,x) − φ(x)ᵀφ(x) over the samples (exact: 0)
 
   std::string BriefReport() const;  // one line
 };

@@ -107,6 +107,7 @@ struct SvrTuningResult {
   long evaluations = 0;             // objective evaluations (cache hits excluded)
   long fits = 0;                    // SVR fits run (evaluations × folds for cv)
   long capped_fits = 0;             // fits stopped at search_max_iterations (still scored)
+  long low_rank_fits = 0;           // fits solved through a complete low-rank factor (SvrApproximation::low_rank)
   std::vector<optim::HistoryPoint> history;
   optim::Termination termination = optim::Termination::budget_exhausted;
   double seconds = 0;               // wall clock of the search
@@ -153,6 +154,7 @@ class SvrObjective {
   double operator()(double C, double sigma, double epsilon) const;
   long fits() const;         // fits run so far
   long capped_fits() const;  // of those, stopped at the iteration cap
+  long low_rank_fits() const;  // of those, solved through a complete low-rank factor
 
  private:
   struct State;

@@ -31,8 +31,11 @@ Data trajectory(int count, unsigned seed) {
   return data;
 }
 
+// The SMO solver's own settings: these tests are about SMO (its KKT conditions, warm
+// starts, iterations), so the low-rank path `automatic` may take is ruled out.
 SvrOptions options(double C, double gamma, double tolerance = 1e-5) {
   SvrOptions result;
+  result.approximation = SvrApproximation::exact;
   result.C = C;
   result.gamma = gamma;
   result.epsilon = 0.1;
@@ -293,10 +296,64 @@ TEST(SvrNystrom, AutomaticTakesItBeyondTheExactLimitOnly) {
     SvrOptions settings = kernel_case(10, 2, SvrApproximation::automatic);
     settings.exact_limit = 1000;
     const SvrFit fit = SvrTrainer(settings).train(data.samples, data.targets);
-    EXPECT_EQ(fit.summary.approximation, count > 1000 ? SvrApproximation::nystrom : SvrApproximation::exact) << count;
-    // Only an exact fit keeps the dual solution a later fit may warm-start from.
-    EXPECT_EQ(fit.alpha.size(), count > 1000 ? 0 : count);
+    // Up to the limit the exact problem, by SMO or (a wide kernel) through a complete factor.
+    if (count > 1000) {
+      EXPECT_EQ(fit.summary.approximation, SvrApproximation::nystrom);
+    } else {
+      EXPECT_NE(fit.summary.approximation, SvrApproximation::nystrom);
+    }
+    // Only an SMO fit keeps the dual solution a later fit may warm-start from.
+    EXPECT_EQ(fit.alpha.size(), fit.summary.approximation == SvrApproximation::exact ? count : 0);
   }
+}
+
+// A wide kernel on two smooth features is of low rank: the automatic fit takes the
+// complete factor and finds the exact problem's optimum in the primal, where SMO with the
+// tuning search's settings (tolerance 1e-2, 20,000 steps) stops at its cap short of it
+// (here 0.4 % above; 1.5-9 times the optimum on the chamber data of docs/tuning.md).
+TEST(SvrLowRank, AutomaticReachesTheOptimumWhereSmoStopsAtItsCap) {
+  const Data data = trajectory(1500, 7);
+  const double C = 3000, gamma = gamma_of_sigma(10);
+  SvrOptions automatic = kernel_case(C, gamma, SvrApproximation::automatic);
+  automatic.epsilon = 0.01;  // the tuning's: most samples outside the tube, at the bound
+  const SvrFit fit = SvrTrainer(automatic).train(data.samples, data.targets);
+  EXPECT_EQ(fit.summary.approximation, SvrApproximation::low_rank) << fit.summary.BriefReport();
+  EXPECT_LE(fit.summary.landmarks, automatic.low_rank_landmarks);
+  EXPECT_EQ(static_cast<std::size_t>(fit.function.support_vectors.rows()), fit.summary.landmarks);
+  EXPECT_LE(fit.summary.kernel_residual, automatic.low_rank_residual);
+
+  SvrOptions converged = automatic;
+  converged.approximation = SvrApproximation::exact;
+  converged.max_iterations = 50'000'000;
+  const SvrFit smo = SvrTrainer(converged).train(data.samples, data.targets);
+  ASSERT_EQ(smo.summary.termination, SvrTermination::converged);
+  const double optimum = primal(smo.function, data, converged);
+  EXPECT_LE(primal(fit.function, data, automatic), optimum * (1 + 1e-6));
+  const Eigen::VectorXd difference = fit.function.predict(data.samples) - smo.function.predict(data.samples);
+  EXPECT_LT(std::sqrt(difference.squaredNorm() / static_cast<double>(difference.size())), 1e-3);
+
+  SvrOptions capped = converged;
+  capped.tolerance = 1e-2;
+  capped.max_iterations = 20'000;
+  const SvrFit stopped = SvrTrainer(capped).train(data.samples, data.targets);
+  EXPECT_EQ(stopped.summary.termination, SvrTermination::iteration_limit);
+  EXPECT_GT(primal(stopped.function, data, capped), primal(fit.function, data, automatic));
+}
+
+TEST(SvrLowRank, FallsBackToSmoWhenTheKernelIsNotOfLowRank) {
+  const Data data = trajectory(1000, 8);
+  SvrOptions settings = kernel_case(10, 8, SvrApproximation::low_rank);
+  const SvrFit narrow = SvrTrainer(settings).train(data.samples, data.targets);
+  EXPECT_EQ(narrow.summary.approximation, SvrApproximation::exact);
+  EXPECT_EQ(narrow.alpha.size(), 1000);  // SMO's dual solution, for a warm start
+  // The same samples with a wide kernel: the factor is complete, the landmarks are the vectors.
+  settings.gamma = gamma_of_sigma(5);
+  const SvrFit wide = SvrTrainer(settings).train(data.samples, data.targets);
+  EXPECT_EQ(wide.summary.approximation, SvrApproximation::low_rank);
+  EXPECT_LT(wide.function.support_vectors.rows(), 64);
+  // With a smaller rank allowed than the kernel needs, SMO again.
+  settings.low_rank_landmarks = 3;
+  EXPECT_EQ(SvrTrainer(settings).train(data.samples, data.targets).summary.approximation, SvrApproximation::exact);
 }
 
 TEST(SvrNystrom, StopsWhenAsked) {
@@ -308,7 +365,8 @@ TEST(SvrNystrom, StopsWhenAsked) {
 }
 
 TEST(SvrNystrom, NamesParseBackAndUnknownOnesAreRefused) {
-  for (const auto approximation : {SvrApproximation::automatic, SvrApproximation::exact, SvrApproximation::nystrom}) {
+  for (const auto approximation : {SvrApproximation::automatic, SvrApproximation::exact, SvrApproximation::nystrom,
+                                   SvrApproximation::low_rank}) {
     EXPECT_EQ(svr_approximation_from_string(to_string(approximation)), approximation);
   }
   EXPECT_THROW(svr_approximation_from_string("fourier"), UsageError);
