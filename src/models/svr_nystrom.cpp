@@ -32,7 +32,7 @@ Factor pivoted_cholesky(const SvrDataset& data, const SvrOptions& options, Worke
   Eigen::VectorXd column(n);
   Eigen::Index rank = 0;
   for (; rank < most; ++rank) {
-    if (rank % 16 == 0) options.stop.throw_if_requested("SVR fit (Nyström landmarks)");
+    if (rank % 16 == 0) options.stop.throw_if_requested("SVR fit (kernel factor)");
     Eigen::Index pivot = 0;
     const double largest = residual.maxCoeff(&pivot);  // the first of equal residuals
     if (!(largest > options.landmark_residual)) break;
@@ -85,7 +85,7 @@ LinearPrimal solve_linear_primal(const Eigen::MatrixXd& phi, const Eigen::Vector
     residual.noalias() = y - x * result.v;  // afresh at each width: no drift from the updates
     bool settled = false;
     for (int step = 0; step < kMaxNewtonSteps && !settled; ++step) {
-      options.stop.throw_if_requested("SVR fit (Nyström)");
+      options.stop.throw_if_requested("SVR fit");
       Eigen::VectorXd gradient = Eigen::VectorXd::Zero(r + 1);
       gradient.head(r) = result.v.head(r);
       Eigen::MatrixXd hessian = Eigen::MatrixXd::Identity(r + 1, r + 1);
