@@ -7,7 +7,8 @@
 //                                  [--folds-by time|runs] [--sensor drawn|coil]
 //                                  [--without turn-on,self-heating]
 //                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any]
-//                                  [--max-cancellation X] [--json FILE]
+//                                  [--max-cancellation X] [--node-under-dynamics on|off]
+//                                  [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
 // is the training log, cycle 2 the "next cycle". Two other profiles of two distinct
@@ -103,6 +104,7 @@ struct Arguments {
   std::optional<double> rate_span;          // --rate-span of the --features auto methods (fit's default if absent)
   bool other_channels = FeatureSelectionOptions{}.other_channels;  // --node-channel any|own
   double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
+  bool node_under_dynamics = FeatureSelectionOptions{}.node_under_dynamics;  // --node-under-dynamics on|off
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -134,6 +136,7 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--json") args.json = value;
     else if (flag == "--rate-span") args.rate_span = std::stod(value);
     else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
+    else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
     else if (flag == "--node-channel" && (value == "own" || value == "any")) args.other_channels = value == "any";
     else if (flag == "--identify" && (value == "greedy" || value == "thermal-node")) {
       args.identify = value == "greedy" ? FeatureSelectionOptions::Method::greedy
@@ -430,6 +433,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       options.selection.method = args.identify;
       options.selection.other_channels = args.other_channels;
       options.selection.max_cancellation = args.max_cancellation;
+      options.selection.node_under_dynamics = args.node_under_dynamics;
       options.folds_by = args.folds_by;
       if (args.rate_span && method != Method::paper) options.rate_span_seconds = args.rate_span;
       if (chooses_features(options)) {

@@ -117,7 +117,10 @@ nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options)
                          {"terms", terms},
                          {"path", steps}};
   if (temperature_channel) json["temperature_channel"] = *temperature_channel + 1;
-  if (options.method == FeatureSelectionOptions::Method::thermal_node) json["power_on_start"] = options.power_on_start;
+  if (options.method == FeatureSelectionOptions::Method::thermal_node) {
+    json["power_on_start"] = options.power_on_start;
+    json["node_under_dynamics"] = options.node_under_dynamics;
+  }
   return json;
 }
 

@@ -51,6 +51,11 @@ struct FeatureSelectionOptions {
   // for logs recorded with the unit already running: the terms would fit a transient that
   // is not there.
   bool power_on_start = true;
+  // thermal_node: once the dynamic terms are grown on the node, search every node structure
+  // on the grid again under them (and grow again from a better one). The node is first
+  // chosen without them, so an unmodelled memory can pick the wrong node; docs/features.md,
+  // step 4. False only to measure what it brings.
+  bool node_under_dynamics = true;
   // Asked before each set is scored (both methods): a stop request throws Interrupted.
   StopToken stop;
   // Axes searched at once by select_features_per_axis (and so by calibrate); each axis'
