@@ -195,9 +195,9 @@ void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
   add_list_option(app, "--features", args.features, "feature terms (default dT,rate, the paper's; lag:TAU, lagrate:TAU, gradrate:TAU:TG, dir:TAU[:LAG[:R0]], grad:A-B, gradrate:A-B, hinge:TAU:K, lag2:T1:T2, lag2rate:T1:T2, nodehinge:T1:T2:TL:K, play:TAU:W, on:TAU, products, powers), or auto to choose them per axis by blocked CV; docs/features.md");
   add_identify_option(app, args.identify);
   app.add_option("--node-channel", args.node_channel,
-                  "with --features auto and one --temp column per axis: look for each axis' thermal node on its "
-                  "own thermometer (own, default) or on any (any: another axis' may sit on its coil; measured "
-                  "mixed, docs/features.md)")
+                  "with --features auto and one --temp column per axis: look for each axis' thermal node on any "
+                  "thermometer (any, default: another axis' may sit on its coil) or on its own only (own); "
+                  "docs/features.md")
       ->check(CLI::IsMember({"own", "any"}))
       ->option_text("own|any");
   app.add_option("--log-start", args.log_start,

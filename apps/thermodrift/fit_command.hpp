@@ -28,7 +28,7 @@ struct FitArguments {
   std::size_t decimate = 0;
   std::vector<std::string> features{"dT", "rate"};
   FeatureSelectionOptions::Method identify = FeatureSelectionOptions{}.method;
-  std::string node_channel = "own";
+  std::string node_channel = "any";
   std::string log_start = "power-on";
   std::string tune;
   std::string objective = "cv";

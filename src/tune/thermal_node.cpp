@@ -350,15 +350,6 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       best_channel = k;
     }
   }
-  cache = &caches[best_channel];
-  if (best_channel != 0) result.temperature_channel = channels[best_channel];
-  Node& found = nodes[best_channel];
-  for (auto& step : found.path) {
-    if (best_channel != 0) step.term += fmt::format(", on temperature channel {}", channels[best_channel] + 1);
-    result.path.push_back(std::move(step));
-  }
-  NodeModel best = std::move(found.best), runner_up = std::move(found.runner_up);
-  double best_cv = found.best_cv, runner_up_cv = found.runner_up_cv;
 
   // Every time constant between grid points (the node's and each dynamic term's): a
   // coordinate pattern search in log scale while the CV MSE falls, then a Nelder-Mead
@@ -466,12 +457,6 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     }
     if (!moves.empty()) result.path.push_back({"tune", moves, model_cv, model.terms()});
   };
-  refine(best, best_cv);
-  if (std::isfinite(runner_up_cv)) {
-    result.path.push_back({"node", "the structure not chosen, for the average below", runner_up_cv, runner_up.terms()});
-    refine(runner_up, runner_up_cv);
-  }
-
   // Dynamic terms, forward from a node: each must cut the CV MSE by more than min_gain.
   // Memories are offered with the rate scale `memory_scale` (0: the default).
   auto grow = [&](NodeModel best, double best_cv, double memory_scale) -> std::pair<NodeModel, double> {
@@ -586,23 +571,76 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     double cv = kInfinity;
     std::vector<std::string> terms;
   };
-  std::vector<Member> members;
-  for (const bool runner : {false, true}) {
-    if (runner && !std::isfinite(runner_up_cv)) break;
-    for (const double scale : kMemoryRateScales) {
-      auto [grown, grown_cv] = grow(runner ? runner_up : best, runner ? runner_up_cv : best_cv, scale);
-      auto [model, cv] = renode(std::move(grown), grown_cv, scale);
-      std::vector<std::string> terms = model.terms();
-      result.path.push_back({"member", fmt::format("{}: {}, memories with a rate scale of {} °C/min", members.size() + 1,
-                                                   runner ? "the node structure not chosen" : "the node",
-                                                   scale > 0 ? scale : kDirectionRateScale),
-                             cv, terms});
-      members.push_back({std::move(model), cv, std::move(terms)});
+  auto lowest_cv = [](const std::vector<Member>& members) {
+    double lowest = kInfinity;
+    for (const auto& member : members) lowest = std::min(lowest, member.cv);
+    return lowest;
+  };
+  // The search on channel k from its node: the node and the structure not chosen refined,
+  // then the six members grown on them (each node searched again under its terms).
+  auto search_channel = [&](std::size_t k) {
+    cache = &caches[k];
+    for (SelectionStep step : nodes[k].path) {
+      if (k != 0) step.term += fmt::format(", on temperature channel {}", channels[k] + 1);
+      result.path.push_back(std::move(step));
+    }
+    NodeModel best = nodes[k].best, runner_up = nodes[k].runner_up;
+    double best_cv = nodes[k].best_cv, runner_up_cv = nodes[k].runner_up_cv;
+    refine(best, best_cv);
+    if (std::isfinite(runner_up_cv)) {
+      result.path.push_back({"node", "the structure not chosen, for the average below", runner_up_cv, runner_up.terms()});
+      refine(runner_up, runner_up_cv);
+    }
+    std::vector<Member> members;
+    for (const bool runner : {false, true}) {
+      if (runner && !std::isfinite(runner_up_cv)) break;
+      for (const double scale : kMemoryRateScales) {
+        auto [grown, grown_cv] = grow(runner ? runner_up : best, runner ? runner_up_cv : best_cv, scale);
+        auto [model, cv] = renode(std::move(grown), grown_cv, scale);
+        std::vector<std::string> terms = model.terms();
+        result.path.push_back({"member", fmt::format("{}: {}, memories with a rate scale of {} °C/min", members.size() + 1,
+                                                     runner ? "the node structure not chosen" : "the node",
+                                                     scale > 0 ? scale : kDirectionRateScale),
+                               cv, terms});
+        members.push_back({std::move(model), cv, std::move(terms)});
+      }
+    }
+    return members;
+  };
+  const std::size_t first_step = result.path.size();
+  std::vector<Member> members = search_channel(best_channel);
+  // The channel again, under the dynamic terms. The rule above compares bare nodes; a node
+  // on another thermometer can win there and lose once each channel's terms are grown
+  // (development law 9, y: another channel's 1,032 s lag beat the own channel's node, and
+  // its grown model stayed 5.5 times the CV MSE of the own channel's, 300x the floor on
+  // the next cycle against 8.7x). So the own channel is searched too, and the other kept
+  // only when its grown model beats the own's by min_gain. The steps of the search not
+  // kept are dropped from the path.
+  if (best_channel != 0 && options.node_under_dynamics) {
+    const std::size_t own_first_step = result.path.size();
+    std::vector<Member> own = search_channel(0);
+    const double other_cv = lowest_cv(members), own_cv = lowest_cv(own);
+    const bool other = other_cv < keep * own_cv;
+    const auto steps = [&](std::size_t k) { return result.path.begin() + static_cast<std::ptrdiff_t>(k); };
+    if (other) {
+      result.path.erase(steps(own_first_step), result.path.end());
+    } else {
+      result.path.erase(steps(first_step), steps(own_first_step));
+      members = std::move(own);
+    }
+    result.path.push_back({"channel",
+                           fmt::format("temperature channel {} grown to CV MSE {:.6g}, the axis' own to {:.6g}: {} kept",
+                                       channels[best_channel] + 1, other_cv, own_cv, other ? "the other" : "the own"),
+                           std::min(other_cv, own_cv), {}});
+    if (!other) best_channel = 0;
+    for (const auto& member : members) {
+      if (member.cv == lowest_cv(members)) result.path.back().terms = member.terms;
     }
   }
+  cache = &caches[best_channel];
+  if (best_channel != 0) result.temperature_channel = channels[best_channel];
   // Only the members the CV cannot tell from the best (within min_gain of its CV MSE).
-  double lowest = kInfinity;
-  for (const auto& member : members) lowest = std::min(lowest, member.cv);
+  const double lowest = lowest_cv(members);
   std::vector<Member> kept;
   std::string kept_numbers;
   for (std::size_t m = 0; m < members.size(); ++m) {

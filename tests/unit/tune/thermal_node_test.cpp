@@ -286,7 +286,7 @@ TEST(ThermalNode, BoundsHowMuchTheFitCancels) {
     options.model = ModelKind::linear;
     options.terms = {"auto"};
     if (!bounded) options.selection.max_cancellation = std::numeric_limits<double>::infinity();
-    // On y's own channel (the default): on z's, which sits on y's coil, the node is a plain
+    // On y's own channel (--node-channel own): on z's, which sits on y's coil, the node is a plain
     // 8 s lag that cancels nothing (137x on the next cycle): nothing to bound.
     options.selection.other_channels = false;
     options.selection.power_on_start = false;
@@ -306,13 +306,14 @@ TEST(ThermalNode, BoundsHowMuchTheFitCancels) {
   EXPECT_LT(100 * ratio[0], ratio[1]) << "held-out MSE over the noise floor, next cycle settled 1800 s";
 }
 
-// The node is chosen before any dynamic term, so an unmodelled memory can pick a node that
-// absorbs it, and the terms grown on that node make up for it. Development law 9, axis y:
-// the coil is two lags (3,059 s and 199 s, back-coupled) behind its thermometer, with a
-// memory of 0.33 °/h; the first node is a lead-lag that stays several times the floor in
-// its own CV. Searched again under the grown terms (the default), the model's CV MSE and
-// its error on a slow programme (a new run of the unit) must both fall.
-TEST(ThermalNode, SearchesTheNodeAgainUnderItsDynamicTerms) {
+// The node and its thermometer are chosen before any dynamic term, so an unmodelled memory
+// can pick a node that absorbs it, and the terms grown on that node make up for it.
+// Development law 9, axis y: the coil is two lags (3,059 s and 199 s, back-coupled) behind
+// its thermometer, with a memory of 0.33 °/h. Chosen once, the node is a 1,032 s lag of
+// another axis' thermometer; searched again under the grown terms (the default), the own
+// channel's grown model wins, with a node found again on it. The model's CV MSE and its
+// error on a slow programme (a new run of the unit) must both fall.
+TEST(ThermalNode, SearchesTheNodeAndItsThermometerAgainUnderItsDynamicTerms) {
   const std::uint64_t seed = 9;
   const sim::UnitLaw unit = sim::draw_unit(seed);
   const sim::ChamberRun run =
@@ -325,7 +326,8 @@ TEST(ThermalNode, SearchesTheNodeAgainUnderItsDynamicTerms) {
   const double floor = slow.noise_floor(100, 1800)[1];
 
   double cv[2] = {0, 0}, ratio[2] = {0, 0};
-  bool renoded[2] = {false, false};
+  bool renoded[2] = {false, false}, own_channel[2] = {false, false};
+  std::string channel_step;
   for (const bool again : {true, false}) {
     CalibrationOptions options;
     options.model = ModelKind::linear;
@@ -335,11 +337,18 @@ TEST(ThermalNode, SearchesTheNodeAgainUnderItsDynamicTerms) {
     const AxisModel& axis = calibration.model.axes[0];
     const auto& selection = axis.fit.at("feature_selection");
     cv[again ? 0 : 1] = selection.at("cv_mse").get<double>();
-    for (const auto& step : selection.at("path")) renoded[again ? 0 : 1] |= step.at("action") == "renode";
+    for (const auto& step : selection.at("path")) {
+      renoded[again ? 0 : 1] |= step.at("action") == "renode";
+      if (again && step.at("action") == "channel") channel_step = step.at("term").get<std::string>();
+    }
+    own_channel[again ? 0 : 1] = !axis.pipeline.temperature_channel.has_value();
     ratio[again ? 0 : 1] = evaluate(calibration.model, {other}, 1800)[0].mse_after / floor;
     std::printf("%s: CV MSE %.3g, slow programme %.3g x floor; %s\n", again ? "again" : "once", cv[again ? 0 : 1],
                 ratio[again ? 0 : 1], fmt::format("{}", fmt::join(axis.pipeline.term_names(), " ")).c_str());
   }
+  EXPECT_FALSE(own_channel[1]) << "chosen once, the node is no longer on another channel: the test tests less";
+  EXPECT_TRUE(own_channel[0]);
+  EXPECT_NE(channel_step.find("the own kept"), std::string::npos) << channel_step;
   EXPECT_TRUE(renoded[0]);
   EXPECT_FALSE(renoded[1]);
   EXPECT_LT(2 * cv[0], cv[1]) << "CV MSE of the search, (°/h)²";
