@@ -631,11 +631,11 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     result.path.push_back({"channel",
                            fmt::format("temperature channel {} grown to CV MSE {:.6g}, the axis' own to {:.6g}: {} kept",
                                        channels[best_channel] + 1, other_cv, own_cv, other ? "the other" : "the own"),
-                           std::min(other_cv, own_cv), {}});
+                           std::min(other_cv, own_cv),
+                           std::min_element(members.begin(), members.end(),
+                                            [](const Member& a, const Member& b) { return a.cv < b.cv; })
+                               ->terms});
     if (!other) best_channel = 0;
-    for (const auto& member : members) {
-      if (member.cv == lowest_cv(members)) result.path.back().terms = member.terms;
-    }
   }
   cache = &caches[best_channel];
   if (best_channel != 0) result.temperature_channel = channels[best_channel];
