@@ -300,11 +300,13 @@ Eigen::MatrixXd evaluate_terms(const std::vector<FeatureTerm>& terms, const Reco
     const TermInputs in{inputs.delta_t[i], inputs.rate[i], inputs.step_seconds[i],
                         std::span<const double>(inputs.channel_means).subspan(i * width, width),
                         std::span<const double>(inputs.channel_rates).subspan(i * width, width)};
-    evaluator.push(in, values);
-    if (inputs.kept[next] == i) {
-      for (std::size_t j = 0; j < terms.size(); ++j) out(static_cast<Eigen::Index>(next), static_cast<Eigen::Index>(j)) = values[j];
-      ++next;
+    if (inputs.kept[next] != i) {
+      evaluator.advance(in);
+      continue;
     }
+    evaluator.push(in, values);
+    for (std::size_t j = 0; j < terms.size(); ++j) out(static_cast<Eigen::Index>(next), static_cast<Eigen::Index>(j)) = values[j];
+    ++next;
   }
   return out;
 }

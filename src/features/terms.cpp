@@ -278,42 +278,109 @@ double TermEvaluator::lag(double& memo_step, double& memo_decay, double state, d
   return memo_decay * state + (1.0 - memo_decay) * input;
 }
 
-TermEvaluator::TermEvaluator(const std::vector<FeatureTerm>& terms) : terms_(&terms) {
-  std::size_t factors = 0;
-  for (const auto& term : terms) factors += term.factors.size();
-  states_.resize(factors);
+namespace {
+
+// The time constant of an atom's first filter when that is a lag of ΔT (0: it has none).
+double first_lag_tau(const FeatureAtom& atom) {
+  using Kind = FeatureAtom::Kind;
+  switch (atom.kind) {
+    case Kind::lag:
+    case Kind::lag_rate:
+    case Kind::gradient_rate:
+    case Kind::hinge:
+    case Kind::lag2:
+    case Kind::lag2_rate:
+    case Kind::node_hinge:
+    case Kind::play: return atom.tau;
+    case Kind::direction: return atom.tau2;
+    default: return 0;
+  }
 }
 
-double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const TermInputs& inputs) {
+// Whether an atom's second filter is the lag (tau2) of its first.
+bool lags_its_lag(const FeatureAtom& atom) {
   using Kind = FeatureAtom::Kind;
+  return (atom.kind == Kind::lag2 || atom.kind == Kind::lag2_rate || atom.kind == Kind::node_hinge) && atom.tau2 > 0;
+}
+
+}  // namespace
+
+TermEvaluator::TermEvaluator(const std::vector<FeatureTerm>& terms) : terms_(&terms) {
+  std::vector<const FeatureAtom*>& atoms = atoms_;
+  for (const auto& term : terms) {
+    for (const auto& factor : term.factors) atoms.push_back(&factor.atom);
+  }
+  states_.resize(atoms.size());
+  first_owner_.resize(atoms.size());
+  second_owner_.resize(atoms.size());
+  for (std::size_t s = 0; s < atoms.size(); ++s) {
+    first_owner_[s] = second_owner_[s] = s;
+    const double tau = first_lag_tau(*atoms[s]);
+    for (std::size_t o = 0; o < s && tau > 0; ++o) {
+      if (first_lag_tau(*atoms[o]) != tau) continue;
+      if (first_owner_[s] == s) first_owner_[s] = o;
+      if (lags_its_lag(*atoms[s]) && lags_its_lag(*atoms[o]) && atoms[o]->tau2 == atoms[s]->tau2) {
+        second_owner_[s] = o;
+        break;
+      }
+    }
+  }
+  using Kind = FeatureAtom::Kind;
+  for (std::size_t s = 0; s < atoms.size(); ++s) {
+    const FeatureAtom& atom = *atoms[s];
+    const bool own_first = first_lag_tau(atom) > 0 && first_owner_[s] == s;
+    const bool own_second = atom.kind == Kind::gradient_rate || atom.kind == Kind::play || atom.kind == Kind::direction ||
+                            atom.kind == Kind::turn_on || (lags_its_lag(atom) && second_owner_[s] == s);
+    if (own_first || own_second) stateful_.push_back(s);
+  }
+}
+
+void TermEvaluator::advance(const TermInputs& inputs) {
+  for (const std::size_t s : stateful_) atom_value(*atoms_[s], s, inputs);
+}
+
+double TermEvaluator::first_lag(std::size_t s, double delta_t, double step_seconds, double tau) {
+  State& state = states_[s];
+  const std::size_t owner = first_owner_[s];
+  state.first = owner == s ? lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, tau)
+                           : states_[owner].first;
+  return state.first;
+}
+
+double TermEvaluator::atom_value(const FeatureAtom& atom, std::size_t s, const TermInputs& inputs) {
+  using Kind = FeatureAtom::Kind;
+  State& state = states_[s];
   const double delta_t = inputs.delta_t;
   const double step_seconds = inputs.step_seconds;
   switch (atom.kind) {
     case Kind::delta_t: return delta_t;
     case Kind::rate: return inputs.rate;
     case Kind::lag:
-      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      first_lag(s, delta_t, step_seconds, atom.tau);
       return state.first;
     case Kind::lag_rate:
-      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      first_lag(s, delta_t, step_seconds, atom.tau);
       return (delta_t - state.first) / atom.tau * 60.0;
     case Kind::gradient_rate: {
-      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      first_lag(s, delta_t, step_seconds, atom.tau);
       const double coil_rate = (delta_t - state.first) / atom.tau * 60.0;
       state.second = lag(state.second_step, state.second_decay, state.second, coil_rate, step_seconds, atom.tau2);
       return (coil_rate - state.second) / atom.tau2 * 60.0;
     }
     case Kind::hinge:
-      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      first_lag(s, delta_t, step_seconds, atom.tau);
       return std::max(0.0, state.first - atom.level);
     case Kind::lead: return delta_t + atom.tau * inputs.rate / 60.0;
     case Kind::lead_hinge: return std::max(0.0, delta_t + atom.tau * inputs.rate / 60.0 - atom.level);
     case Kind::lag2:
     case Kind::lag2_rate:
     case Kind::node_hinge: {
-      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      first_lag(s, delta_t, step_seconds, atom.tau);
       if (atom.tau2 > 0) {
-        state.second = lag(state.second_step, state.second_decay, state.second, state.first, step_seconds, atom.tau2);
+        const std::size_t owner = second_owner_[s];
+        state.second = owner == s ? lag(state.second_step, state.second_decay, state.second, state.first, step_seconds,
+                                        atom.tau2)
+                                  : states_[owner].second;
       }
       if (atom.kind == Kind::lag2) return state.second;
       if (atom.kind == Kind::lag2_rate) return (state.first - state.second) / atom.tau2 * 60.0;
@@ -322,7 +389,7 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
       return std::max(0.0, node - atom.level);
     }
     case Kind::play: {
-      state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau);
+      first_lag(s, delta_t, step_seconds, atom.tau);
       if (!(step_seconds > 0)) state.second = state.first;  // equilibrium: nothing to catch up
       state.second = std::clamp(state.second, state.first - atom.level, state.first + atom.level);
       return (state.first - state.second) / atom.level;
@@ -335,7 +402,7 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, State& state, const Te
     case Kind::direction: {
       double source = inputs.rate;
       if (atom.tau2 > 0) {
-        state.first = lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, atom.tau2);
+        first_lag(s, delta_t, step_seconds, atom.tau2);
         source = (delta_t - state.first) / atom.tau2 * 60.0;
       }
       state.second = lag(state.second_step, state.second_decay, state.second,
@@ -361,7 +428,7 @@ void TermEvaluator::push(const TermInputs& inputs, std::span<double> values) {
   for (std::size_t i = 0; i < terms_->size(); ++i) {
     double value = 1;
     for (const auto& factor : (*terms_)[i].factors) {
-      const double atom = atom_value(factor.atom, states_[s++], inputs);
+      const double atom = atom_value(factor.atom, s++, inputs);
       for (int p = 0; p < factor.power; ++p) value *= atom;
     }
     values[i] = value;

@@ -132,6 +132,10 @@ class TermEvaluator {
   // One sample; writes one value per term. A grad term whose channel is not in the
   // inputs is a UsageError.
   void push(const TermInputs& inputs, std::span<double> values);
+  // One sample whose values are not wanted: only the filters that carry state from sample
+  // to sample are stepped (a node's hinges, level and rate are read off its one filter at
+  // the next push). The values of later pushes are the same, bit for bit.
+  void advance(const TermInputs& inputs);
   // The same for terms that read no temperature channel but the axis' own.
   void push(double delta_t, double rate, double step_seconds, std::span<double> values) {
     push(TermInputs{delta_t, rate, step_seconds, {}, {}}, values);
@@ -148,10 +152,18 @@ class TermEvaluator {
   // lag_step with the filter's memoized decay; the same arithmetic, so the same bits.
   static double lag(double& memo_step, double& memo_decay, double state, double input, double step_seconds,
                     double tau);
-  double atom_value(const FeatureAtom& atom, State& state, const TermInputs& inputs);
+  // Factor s's first filter (the lag of ΔT), stepped by the first factor that has the same
+  // one and copied by the others: a node's level, hinges and rate share one filter.
+  double first_lag(std::size_t s, double delta_t, double step_seconds, double tau);
+  double atom_value(const FeatureAtom& atom, std::size_t s, const TermInputs& inputs);
 
   const std::vector<FeatureTerm>* terms_;
   std::vector<State> states_;  // one per factor, in order
+  // Per factor: the factor that steps its first filter, and (lag2, lag2rate, nodehinge with
+  // a second lag) its second; itself when no earlier factor has the same filter.
+  std::vector<std::size_t> first_owner_, second_owner_;
+  std::vector<const FeatureAtom*> atoms_;  // per factor
+  std::vector<std::size_t> stateful_;      // the factors advance steps
 };
 
 // First-order lag update exact for an input held over the step; `step_seconds` 0 sets

@@ -282,5 +282,43 @@ TEST(FeatureTerms, ProductsAndPowersMultiplyTheAtoms) {
   }
 }
 
+// Terms that share a filter (a node's level, hinges and rate; two lags in series and their
+// node; plays and memories on the same lag) are stepped once per sample and read off it, and
+// samples whose values are not wanted only advance the filters. Both must leave every value
+// bit for bit what each term gives alone, pushed at every sample, through uneven steps and
+// restarts.
+TEST(FeatureTerms, SharedFiltersAndSkippedSamplesChangeNoValue) {
+  const std::vector<std::string> names{"lag:600", "hinge:600:-2", "hinge:600:3", "lagrate:600", "lag2:600:120",
+                                       "nodehinge:600:120:0:1", "lag2rate:600:120", "nodehinge:600:120:900:-1",
+                                       "nodehinge:600:0:300:0.5", "lag2:600:240", "play:600:1", "dir:900:600",
+                                       "gradrate:600:120", "lag:600^2*rate", "on:300", "dir:400", "rate", "dT",
+                                       "nodehinge:300:0:0:2", "lag:300*hinge:600:0"};
+  const auto terms = parse_all(names);
+  TermEvaluator together(terms);
+  std::vector<std::vector<FeatureTerm>> single;
+  for (const auto& term : terms) single.push_back({term});
+  std::vector<TermEvaluator> alone;
+  for (const auto& one : single) alone.emplace_back(one);
+  std::vector<double> values(terms.size()), value(1);
+  int compared = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const double step = k == 0 || k == 1700 ? 0 : (k % 7 == 0 ? 2.5 : 1.0);
+    const double delta_t = 8 * std::sin(k / 300.0) + 0.01 * (k % 13), rate = 1.6 * std::cos(k / 300.0);
+    const bool wanted = k % 10 == 0 || (k > 1690 && k < 1710);
+    if (wanted) {
+      together.push(delta_t, rate, step, values);
+    } else {
+      together.advance(TermInputs{delta_t, rate, step, {}, {}});
+    }
+    for (std::size_t j = 0; j < terms.size(); ++j) {
+      alone[j].push(delta_t, rate, step, value);
+      if (!wanted) continue;
+      ASSERT_EQ(values[j], value[0]) << names[j] << " at sample " << k;
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, static_cast<int>(terms.size()) * (300 + 19 - 1));  // sample 1700 counted once
+}
+
 }  // namespace
 }  // namespace thermodrift
