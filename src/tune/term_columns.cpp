@@ -33,21 +33,34 @@ ColumnCache::ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, 
 }
 
 void ColumnCache::ensure(const std::vector<std::string>& names) {
+  ++clock_;
   std::vector<FeatureTerm> missing;
   for (const auto& name : names) {
-    if (!columns_.count(name)) missing.push_back(FeatureTerm::parse(name));
+    const auto found = columns_.find(name);
+    if (found == columns_.end()) {
+      missing.push_back(FeatureTerm::parse(name));
+    } else {
+      found->second.last_use = clock_;
+    }
   }
   if (missing.empty()) return;
+  // Past the budget, the half of the columns used longest ago go: the terms a search keeps
+  // in every set it scores stay, the time constants it has moved on from do not.
   const std::size_t column_bytes = static_cast<std::size_t>(target_.size()) * sizeof(double);
   if ((columns_.size() + missing.size()) * column_bytes > kBudgetBytes) {
-    std::erase_if(columns_, [&](const auto& entry) {
-      return std::find(names.begin(), names.end(), entry.first) == names.end();
-    });
+    std::vector<std::uint64_t> uses;
+    for (const auto& entry : columns_) uses.push_back(entry.second.last_use);
+    const auto middle = uses.begin() + static_cast<std::ptrdiff_t>(uses.size() / 2);
+    std::nth_element(uses.begin(), middle, uses.end());
+    const std::uint64_t oldest_kept = *middle;
+    std::erase_if(columns_, [&](const auto& entry) { return entry.second.last_use < oldest_kept; });
   }
   std::vector<Eigen::MatrixXd> parts;
   for (const auto& log : inputs_) parts.push_back(evaluate_terms(missing, log));
   for (std::size_t j = 0; j < missing.size(); ++j) {
-    Eigen::VectorXd& column = columns_[missing[j].name()];
+    Column& entry = columns_[missing[j].name()];
+    entry.last_use = clock_;
+    Eigen::VectorXd& column = entry.values;
     column.resize(target_.size());
     Eigen::Index row = 0;
     for (const auto& part : parts) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -18,7 +19,7 @@ namespace thermodrift {
 
 // The ready, decimated samples of every term asked for so far, one column per term name:
 // each new batch of terms is one pass of the terms over the logs' recorded inputs. The time-constant search
-// asks for many columns, so past a byte budget the cache starts afresh.
+// asks for many columns, so past a byte budget the half used longest ago is dropped.
 class ColumnCache {
  public:
   ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline);
@@ -34,17 +35,22 @@ class ColumnCache {
   Eigen::MatrixXd matrix(const std::vector<std::string>& names) {
     ensure(names);
     Eigen::MatrixXd x(target_.size(), static_cast<Eigen::Index>(names.size()));
-    for (std::size_t j = 0; j < names.size(); ++j) x.col(static_cast<Eigen::Index>(j)) = columns_.at(names[j]);
+    for (std::size_t j = 0; j < names.size(); ++j) x.col(static_cast<Eigen::Index>(j)) = columns_.at(names[j]).values;
     return x;
   }
 
  private:
-  static constexpr std::size_t kBudgetBytes = std::size_t{256} << 20;
+  static constexpr std::size_t kBudgetBytes = std::size_t{128} << 20;
   // The terms' inputs over each log, smoothed once (every temperature channel recorded).
   std::vector<RecordedInputs> inputs_;
   Eigen::VectorXd target_;
   std::vector<std::size_t> run_start_;
-  std::map<std::string, Eigen::VectorXd> columns_;
+  struct Column {
+    Eigen::VectorXd values;
+    std::uint64_t last_use = 0;  // the clock_ of the last ensure that asked for it
+  };
+  std::map<std::string, Column> columns_;
+  std::uint64_t clock_ = 0;
 };
 
 // Pooled MSE of least squares (with an intercept) over held-out `blocks` (contiguous
