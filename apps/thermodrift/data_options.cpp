@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "thermodrift/error.hpp"
@@ -50,7 +51,9 @@ void DataOptions::add_to(CLI::App& app, bool data_required) {
   app.add_option("--format", format, "csv (default) or libsvm")
       ->check(CLI::IsMember({"csv", "libsvm"}));
   app.add_option("--time", time, "time column (in --time-unit, or ISO 8601 stamps), header name or 1-based index");
-  app.add_option("--rate", rate, "sampling rate in Hz when there is no time column")
+  app.add_option("--rate", rate,
+                 "sampling rate in Hz, for a log without a time column (a time column is then not read; not with "
+                 "--time)")
       ->check(kPositive);
   add_list_option(app, "--gyro", gyro, "gyro column(s), one model per axis");
   add_list_option(app, "--temp", temperature,
@@ -76,6 +79,9 @@ void DataOptions::add_to(CLI::App& app, bool data_required) {
 }
 
 LogSpec DataOptions::spec() const {
+  if (!time.empty() && rate > 0) {
+    throw UsageError("--time and --rate: give one (the time column, or the sampling rate of a log without one)");
+  }
   LogSpec spec;
   if (!time.empty()) spec.time_column = time;
   if (rate > 0) spec.rate_hz = rate;
@@ -145,6 +151,12 @@ std::vector<ChamberLog> DataOptions::read(const LogSpec& spec, double warm_up_se
     }
   }
   return logs;
+}
+
+void check_identify(const CLI::App& app, const std::vector<std::string>& features) {
+  if (app.count("--identify") && std::find(features.begin(), features.end(), "auto") == features.end()) {
+    throw UsageError("--identify applies to --features auto (how it chooses the terms)");
+  }
 }
 
 void add_identify_option(CLI::App& app, FeatureSelectionOptions::Method& method) {

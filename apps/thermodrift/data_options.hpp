@@ -61,6 +61,8 @@ struct DataOptions {
 // Declares --identify thermal-node|greedy (how `--features auto` finds the terms) for fit,
 // report and demo.
 void add_identify_option(CLI::App& app, FeatureSelectionOptions::Method& method);
+// --identify given without auto among `features` is a UsageError: it would be ignored.
+void check_identify(const CLI::App& app, const std::vector<std::string>& features);
 
 // "thermodrift: warning: ..." on stderr, or to the sink set_warning_sink installed.
 void warn(const std::string& message);

@@ -99,7 +99,10 @@ Command add_demo(CLI::App& parent) {
   add_list_option(*app, "--features", args->features, "feature terms to compare with the paper's dT,rate (e.g. auto, or lag:600,lagrate:600); docs/features.md");
   add_identify_option(*app, args->identify);
   app->add_option("--threads", args->threads, "threads for the SVR fits (default 2)")->check(kThreads);
-  return {app, [args] { return run_demo(*args); }};
+  return {app, [args, app] {
+            check_identify(*app, args->features);
+            return run_demo(*args);
+          }};
 }
 
 }  // namespace thermodrift::cli

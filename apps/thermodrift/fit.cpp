@@ -17,16 +17,52 @@
 
 namespace thermodrift::cli {
 
+namespace {
+
+// The SVR's C and σ are tuned together or both given (FitRequest's rule): a value that
+// tuning would replace, and a tuning option without tuning, are usage errors.
+void check_svr_parameters(const CLI::App& app) {
+  const bool C = app.count("--C") > 0, width = app.count("--sigma") + app.count("--gamma") > 0;
+  if (app.count("--tune")) {
+    for (const char* option : {"--C", "--sigma", "--gamma"}) {
+      if (app.count(option)) {
+        throw UsageError(fmt::format("{} with --tune: tuning chooses C and σ; give --tune, or --C with --sigma "
+                                     "(or --gamma) to fix both",
+                                     option));
+      }
+    }
+  } else if (C != width) {
+    throw UsageError(fmt::format("{} alone would be replaced: C and σ are tuned together; give --C with --sigma "
+                                 "(or --gamma) to fix both",
+                                 C ? "--C" : (app.count("--sigma") ? "--sigma" : "--gamma")));
+  } else if (C) {
+    for (const char* option : {"--objective", "--evaluations", "--folds", "--tune-epsilon"}) {
+      if (app.count(option)) {
+        throw UsageError(fmt::format("{} applies when C and σ are tuned, not with --C and --sigma given", option));
+      }
+    }
+  }
+  if (app.count("--epsilon") && app.count("--tune-epsilon")) {
+    throw UsageError("--epsilon with --tune-epsilon: tuning chooses ε; give one of them");
+  }
+}
+
+}  // namespace
+
 FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::vector<ChamberLog> logs,
                           const LogSpec& spec, const StopToken& stop, const FitProgress& progress) {
   if (args.model != "svr") {
     // Never silently ignored: the SVR's and its tuning's options with another model.
     for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
-                               "--evaluations", "--folds", "--tune-epsilon", "--max-vectors"}) {
+                               "--evaluations", "--folds", "--tune-epsilon", "--max-vectors", "--kernel",
+                               "--landmarks"}) {
       if (app.count(option)) throw UsageError(fmt::format("{} applies to --model svr, not {}", option, args.model));
     }
+  } else {
+    check_svr_parameters(app);
   }
   const bool auto_features = args.features.size() == 1 && args.features.front() == "auto";
+  check_identify(app, args.features);
   for (const char* option : {"--node-channel", "--log-start"}) {
     if (app.count(option) && !(auto_features && args.identify == FeatureSelectionOptions::Method::thermal_node)) {
       throw UsageError(fmt::format("{} applies to --features auto with the thermal-node identification", option));

@@ -152,7 +152,10 @@ Command add_report(CLI::App& parent) {
   app->add_option("--threads", args->threads, "threads for the SVR fits")->check(kThreads);
   app->add_option("--evaluations", args->evaluations, "AFSA budget of objective evaluations per axis (default 100)")
       ->check(kEvaluations);
-  return {app, [args] { return run_report(*args); }};
+  return {app, [args, app] {
+            check_identify(*app, args->features);
+            return run_report(*args);
+          }};
 }
 
 }  // namespace thermodrift::cli

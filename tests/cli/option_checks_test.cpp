@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "../support/temp_dir.hpp"
 
@@ -86,6 +88,49 @@ TEST(OptionChecks, AnUnconvergedSvrIsAWarningAndAnAbsurdCAUsageError) {
   EXPECT_EQ(absurd.status, 2);
   EXPECT_NE(absurd.err.find("--C: expected a finite number above 0 and at most 1e12"), std::string::npos) << absurd.err;
   EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
+}
+
+// One rule for C and σ: tuned together (the paper's AFSA) or both given. An option that
+// tuning would override, or that only tuning reads, is refused rather than dropped, as are
+// the SVR's kernel options with another model, --identify without --features auto and a
+// time column named beside a sampling rate (fit read the column, evaluate the rate).
+TEST(OptionChecks, OptionsThatWouldBeDroppedAreUsageErrors) {
+  TempDir dir;
+  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
+  const std::string fit = "fit --data log.csv --gyro gyro_x --temp temp_x --out m.json ";
+  for (const auto& [options, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"--model linear --kernel nystrom", "--kernel applies to --model svr, not linear"},
+           {"--model stepwise --landmarks 100", "--landmarks applies to --model svr, not stepwise"},
+           {"--model svr --C 1 --sigma 1 --tune grid", "--C with --tune: tuning chooses C and σ"},
+           {"--model svr --gamma 0.5 --tune afsa", "--gamma with --tune"},
+           {"--model svr --C 10", "--C alone would be replaced: C and σ are tuned together"},
+           {"--model svr --sigma 2", "--sigma alone would be replaced"},
+           {"--model svr --C 10 --sigma 1 --evaluations 5", "--evaluations applies when C and σ are tuned"},
+           {"--model svr --C 10 --gamma 1 --objective holdout", "--objective applies when C and σ are tuned"},
+           {"--model svr --C 10 --sigma 1 --folds 3", "--folds applies when C and σ are tuned"},
+           {"--model svr --C 10 --sigma 1 --tune-epsilon", "--tune-epsilon applies when C and σ are tuned"},
+           {"--model svr --epsilon 0.3 --tune-epsilon", "--epsilon with --tune-epsilon"},
+           {"--model linear --identify greedy", "--identify applies to --features auto"},
+           {"--model linear --features dT,lag:600 --identify thermal-node", "--identify applies to --features auto"},
+           {"--model linear --time time_s --rate 2", "--time and --rate: give one"}}) {
+    SCOPED_TRACE(options);
+    const auto result = run_thermodrift(dir, fit + options);
+    EXPECT_EQ(result.status, 2);
+    EXPECT_NE(result.err.find(expected), std::string::npos) << result.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
+  }
+  for (const char* command : {"report --data log.csv --out r --identify greedy", "demo --out d --identify greedy"}) {
+    const auto result = run_thermodrift(dir, command);
+    EXPECT_EQ(result.status, 2) << command;
+    EXPECT_NE(result.err.find("--identify applies to --features auto"), std::string::npos) << result.err;
+  }
+  // What stays: both fixed, tuning with its own options.
+  EXPECT_EQ(run_thermodrift(dir, fit + "--model svr --C 10 --sigma 1 --epsilon 0.1").status, 0);
+  EXPECT_EQ(run_thermodrift(dir, fit + "--model svr --tune random --evaluations 4 --folds 3 --tune-epsilon").status, 0);
+  ASSERT_EQ(run_thermodrift(dir, fit + "--model linear").status, 0);
+  const auto evaluate = run_thermodrift(dir, "evaluate --model m.json --data log.csv --time time_s --rate 2");
+  EXPECT_EQ(evaluate.status, 2);
+  EXPECT_NE(evaluate.err.find("--time and --rate: give one"), std::string::npos) << evaluate.err;
 }
 
 }  // namespace
