@@ -3,8 +3,10 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 
 #include "commands.hpp"
@@ -35,7 +37,16 @@ int main(int argc, char** argv) {
   // EPIPE, reported as one line and exit 1, not kill the process without a word.
   std::signal(SIGPIPE, SIG_IGN);
   try {
-    return thermodrift::cli::run_selected(commands);
+    const int status = thermodrift::cli::run_selected(commands);
+    // What a command printed on stdout (evaluate's table, fit --json, export's summary)
+    // must all have reached it: a full disk or a reader gone is exit 1, not 0.
+    errno = 0;
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+      std::fprintf(stderr, "thermodrift: cannot write the standard output: %s\n",
+                   errno != 0 ? std::strerror(errno) : "a write failed");
+      return status != 0 ? status : static_cast<int>(ExitStatus::failure);
+    }
+    return status;
   } catch (const thermodrift::Interrupted& e) {
     std::fprintf(stderr, "thermodrift: interrupted (%s); no output written\n", e.what());
     return thermodrift::cli::interrupted_exit_status();

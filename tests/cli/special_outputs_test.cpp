@@ -91,6 +91,24 @@ TEST_F(SpecialOutputs, AFullDeviceIsExit1WithOneLine) {
   EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"full", "model.json", "sim.csv"}));
 }
 
+// Results printed on the standard output (evaluate's table, fit --json, export's summary)
+// that do not all reach it are exit 1 with one line, as with --out (they were exit 0).
+TEST_F(SpecialOutputs, AStandardOutputThatCannotBeWrittenIsExit1) {
+  if (const auto why = testing::make_memory_device(dir_.file("full"), testing::kFullMinor); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
+  for (const std::string& command : std::vector<std::string>{"evaluate --model model.json --data sim.csv", "export --model model.json --out model.h",
+                                                               "fit --data sim.csv" + kTemps + " --model linear --json --out again.json"}) {
+    SCOPED_TRACE(command);
+    const auto result = testing::run_in(dir_, "( '" + kBinary + "' " + command + " > full )");
+    EXPECT_EQ(result.status, 1) << result.err;
+    EXPECT_NE(result.err.find("thermodrift: cannot write the standard output: No space left on device"),
+              std::string::npos)
+        << result.err;
+    EXPECT_EQ(file_type(dir_.file("full")), S_IFCHR);
+  }
+}
+
 TEST_F(SpecialOutputs, AFifoReaderGetsTheWholeOutput) {
   testing::make_fifo(dir_.file("pipe"));
   testing::FifoReader reader(dir_.file("pipe"));
