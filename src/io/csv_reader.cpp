@@ -217,6 +217,9 @@ std::optional<CsvRow> CsvReader::next() {
       } while (is_blank(line));
       row = split(std::move(line), line_number_);
     }
+    // A logger that ends every field with the delimiter leaves an empty field past the
+    // header's last: not a field (a row with a value there is still one too many).
+    if (row->size() == column_count_ + 1 && row->spans.back().second == 0) row->spans.pop_back();
     const std::size_t count = row->size();
     if (count == column_count_) {
       ++rows_returned_;

@@ -245,6 +245,22 @@ TEST(CsvReader, LongRowNamesLineAndFirstExtraColumn) {
   EXPECT_TRUE(contains(error.message(), "row has 4 fields, expected 3")) << error.what();
 }
 
+// A trailing delimiter on every data row (not on the header) is an empty field past the
+// last column: read as the header's fields, in strict mode too; a value there is not.
+TEST(CsvReader, ATrailingDelimiterOnTheDataRowsIsNotAField) {
+  TempDir dir;
+  CsvOptions strict;
+  strict.garbled_per_thousand = 0;
+  CsvReader reader(dir.write("trailing.csv", "t,a,b\n0,1,2,\n1,2,3 ,\n"), strict);
+  const auto rows = all_rows(reader);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"0", "1", "2"}));
+  EXPECT_EQ(rows[1], (std::vector<std::string>{"1", "2", "3"}));
+  const auto error = read_error(dir.write("extra.csv", "t,a,b\n0,1,2,\n1,2,3,4\n"), strict);
+  EXPECT_EQ(error.line(), 3u);
+  EXPECT_TRUE(contains(error.message(), "row has 4 fields, expected 3")) << error.what();
+}
+
 TEST(CsvReader, StrictModeFailsAtTheRowItself) {
   TempDir dir;
   std::string text = "t,a,b\n";
