@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/io/json_integer.hpp"
 
 namespace thermodrift {
@@ -50,7 +51,10 @@ void Pipeline::validate() const {
     throw UsageError(fmt::format("gap threshold must be >= 0 s, not {}", gap_seconds));
   }
   if (decimation < 1) throw UsageError("decimation must be at least 1");
-  if (!std::isfinite(reference_temperature)) throw UsageError("reference temperature is not finite");
+  if (!plausible_temperature(reference_temperature)) {  // a model file's number within ±1e12 may still be absurd
+    throw UsageError(fmt::format("reference temperature {:g} °C is beyond {:g}..{:g} °C", reference_temperature,
+                                 kMinTemperatureC, kMaxTemperatureC));
+  }
   if (terms.empty()) throw UsageError("a pipeline needs at least one feature term");
   if (temperature_channel && *temperature_channel >= kMaxTemperatureChannels) {
     throw UsageError(fmt::format("temperature channel {} is beyond the {} a model can read",

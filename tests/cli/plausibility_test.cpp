@@ -79,6 +79,17 @@ TEST(Plausibility, AModelWithAbsurdNumbersIsRefusedAtLoad) {
   }
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.csv")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("m.h")));
+  // Within ±1e12 but no temperature: a reference of 1e11 °C made compensate write 1.6e12 °/h.
+  std::string hot = read_file(dir.file("m.json"));
+  const auto reference = hot.find("\"reference_temperature\": ");
+  ASSERT_NE(reference, std::string::npos);
+  const auto value = reference + 25;
+  hot.replace(value, hot.find_first_of(",\n}", value) - value, "1e11");
+  dir.write("hot.json", hot);
+  const auto result = run_thermodrift(dir, "compensate --model hot.json --data log.csv --out c.csv");
+  EXPECT_EQ(result.status, 3) << result.err;
+  EXPECT_TRUE(contains(result.err, "reference temperature 1e+11 °C is beyond -273.15..1000 °C")) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("c.csv")));
 }
 
 }  // namespace
