@@ -101,7 +101,16 @@ Command add_compress(CLI::App& parent) {
       ->check(kNonNegative);
   app->add_option("--out", args->out, "model file to write")->required();
   app->add_flag("--json", args->json, "print one JSON object on stdout");
-  return {app, [args] { return run_compress(*args); }};
+  return {app, [args, app] {
+            if (args->data.files.empty()) {  // how to read and score logs: nothing to apply it to
+              for (const char* option : {"--settle", "--format", "--time", "--rate", "--gyro", "--temp", "--gyro-unit",
+                                         "--time-unit", "--temp-scale", "--temp-offset", "--gyro-scale", "--smooth",
+                                         "--despike"}) {
+                if (app->count(option)) throw UsageError(fmt::format("{} applies with --data", option));
+              }
+            }
+            return run_compress(*args);
+          }};
 }
 
 }  // namespace thermodrift::cli

@@ -63,6 +63,10 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
   }
   const bool auto_features = args.features.size() == 1 && args.features.front() == "auto";
   check_identify(app, args.features);
+  const bool tuned = args.model == "svr" && !(app.count("--C") && app.count("--sigma") + app.count("--gamma"));
+  if (app.count("--folds-by") && !auto_features && !tuned) {
+    throw UsageError("--folds-by applies to the cross-validation of --features auto and of the SVR's tuning");
+  }
   for (const char* option : {"--node-channel", "--log-start"}) {
     if (app.count(option) && !(auto_features && args.identify == FeatureSelectionOptions::Method::thermal_node)) {
       throw UsageError(fmt::format("{} applies to --features auto with the thermal-node identification", option));

@@ -42,6 +42,9 @@ inline const CLI::Validator kPositive = detail::finite_at_least(0, true, "a fini
 inline const CLI::Validator kModelScale = detail::finite_at_least(0, true, "a finite number above 0 and at most 1e12", 1e12);
 // σ: γ = 1/(2σ²) at most 1e12.
 inline const CLI::Validator kKernelWidth = detail::finite_at_least(1e-6, false, "a finite number of at least 1e-6", HUGE_VAL, "POSITIVE");
+// A chamber temperature (°C) within the physical range a log may hold (io/chamber_log.hpp).
+inline const CLI::Validator kCelsius =
+    detail::finite_at_least(-273.15, false, "a temperature from -273.15 to 1000 °C", 1000, "CELSIUS");
 // A finite number >= 0 (smoothing, settling, ε).
 inline const CLI::Validator kNonNegative = detail::finite_at_least(0, false, "a finite number of 0 or more");
 

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "commands.hpp"
 #include "numbers.hpp"
@@ -55,8 +56,8 @@ Command add_simulate(CLI::App& parent) {
   app->add_option("--seed", args->options.seed, "seed of every noise stream")->check(kSeed);
   app->add_option("--cycles", args->options.cycles, "number of chamber cycles")->check(whole_number(1, 1000));
   app->add_option("--rate", args->options.rate_hz, "sample rate in Hz")->check(kPositive);
-  app->add_option("--min-temp", args->options.chamber_min_c, "cold extreme of the chamber, °C");
-  app->add_option("--max-temp", args->options.chamber_max_c, "hot extreme of the chamber, °C");
+  app->add_option("--min-temp", args->options.chamber_min_c, "cold extreme of the chamber, °C")->check(kCelsius);
+  app->add_option("--max-temp", args->options.chamber_max_c, "hot extreme of the chamber, °C")->check(kCelsius);
   app->add_option("--ramp", args->options.ramp_rate_c_per_min, "chamber ramp rate, °C/min")
       ->check(kPositive);
   app->add_option("--soak", args->options.extreme_soak_min, "soak at each extreme, minutes")
@@ -71,7 +72,17 @@ Command add_simulate(CLI::App& parent) {
   app->add_flag("--describe", args->describe, "with --law: print the drawn unit's law on stderr");
   app->add_flag("--internal-states", args->options.record_internal_states,
                 "also write the coil temperature, gradient and hysteresis state of each axis");
-  return {app, [args] { return run_simulate(*args); }};
+  return {app, [args, app] {
+            // The default unit's programme, or a drawn law's: the other's options would be ignored.
+            for (const char* option : args->law ? std::vector<const char*>{"--min-temp", "--max-temp", "--ramp", "--soak",
+                                                                           "--internal-states"}
+                                                : std::vector<const char*>{"--profile", "--profile-seed", "--describe"}) {
+              if (app->count(option) == 0) continue;
+              throw UsageError(fmt::format(fmt::runtime(args->law ? "{} applies to the default unit, not --law" : "{} applies with --law"),
+                                           option));
+            }
+            return run_simulate(*args);
+          }};
 }
 
 }  // namespace thermodrift::cli

@@ -111,6 +111,7 @@ TEST(OptionChecks, OptionsThatWouldBeDroppedAreUsageErrors) {
            {"--model svr --C 10 --sigma 1 --tune-epsilon", "--tune-epsilon applies when C and σ are tuned"},
            {"--model svr --epsilon 0.3 --tune-epsilon", "--epsilon with --tune-epsilon"},
            {"--model linear --identify greedy", "--identify applies to --features auto"},
+           {"--model linear --folds-by runs", "--folds-by applies to the cross-validation of --features auto"},
            {"--model linear --features dT,lag:600 --identify thermal-node", "--identify applies to --features auto"},
            {"--model linear --time time_s --rate 2", "--time and --rate: give one"}}) {
     SCOPED_TRACE(options);
@@ -124,8 +125,24 @@ TEST(OptionChecks, OptionsThatWouldBeDroppedAreUsageErrors) {
     EXPECT_EQ(result.status, 2) << command;
     EXPECT_NE(result.err.find("--identify applies to --features auto"), std::string::npos) << result.err;
   }
+  // simulate: the default unit's programme options, or a drawn law's.
+  for (const auto& [options, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"--profile slow", "--profile applies with --law"},
+           {"--describe", "--describe applies with --law"},
+           {"--law 3 --ramp 2", "--ramp applies to the default unit, not --law"},
+           {"--law 3 --internal-states", "--internal-states applies to the default unit, not --law"},
+           {"--min-temp nan", "--min-temp: expected a temperature from -273.15 to 1000 °C, not 'nan'"}}) {
+    SCOPED_TRACE(options);
+    const auto result = run_thermodrift(dir, "simulate --out s.csv " + options);
+    EXPECT_EQ(result.status, 2);
+    EXPECT_NE(result.err.find(expected), std::string::npos) << result.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("s.csv")));
+  }
   // What stays: both fixed, tuning with its own options.
   EXPECT_EQ(run_thermodrift(dir, fit + "--model svr --C 10 --sigma 1 --epsilon 0.1").status, 0);
+  const auto compress = run_thermodrift(dir, "compress --model m.json --settle 10 --out c.json");
+  EXPECT_EQ(compress.status, 2);
+  EXPECT_NE(compress.err.find("--settle applies with --data"), std::string::npos) << compress.err;
   EXPECT_EQ(run_thermodrift(dir, fit + "--model svr --tune random --evaluations 4 --folds 3 --tune-epsilon").status, 0);
   ASSERT_EQ(run_thermodrift(dir, fit + "--model linear").status, 0);
   const auto evaluate = run_thermodrift(dir, "evaluate --model m.json --data log.csv --time time_s --rate 2");
