@@ -202,12 +202,11 @@ void AtomicFile::commit() {
   if (error != 0) throw Error(fmt::format("cannot write {}: {}", path_, std::strerror(error)));
   if (!stream_) throw Error(fmt::format("cannot write {}: the output stream failed", path_));
   if (!in_place()) {
-    // mkstemp creates 0600; a result file should carry the usual permissions.
-    std::error_code ignored;
-    fs::permissions(temporary_path_,
-                    fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
-                        fs::perms::others_read,
-                    ignored);
+    // mkstemp creates 0600: a file replaced keeps its permissions, a new one gets the
+    // usual 0644.
+    struct stat existing {};
+    const bool replacing = ::stat(target_path_.c_str(), &existing) == 0 && S_ISREG(existing.st_mode);
+    ::chmod(temporary_path_.c_str(), replacing ? (existing.st_mode & 07777) : 0644);
     if (std::rename(temporary_path_.c_str(), target_path_.c_str()) != 0) {
       throw Error(fmt::format("cannot move the output into place at {}: {}", path_, std::strerror(errno)));
     }
@@ -268,6 +267,9 @@ void remove_abandoned_staging(const fs::path& parent, const std::string& name) {
       continue;
     }
     if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge
+    // A folder output staged inside another (demo's report) has its staging folder beside
+    // that one: ..DIR.partial-PID-N.partial-PID-M.
+    remove_abandoned_staging(parent, entry_name);
     std::error_code ignored;
     fs::remove_all(entry.path(), ignored);
   }

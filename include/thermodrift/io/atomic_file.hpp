@@ -9,7 +9,8 @@
 // - A block device, a socket or any other kind of file is refused (UsageError).
 // - A regular file, or a name that does not exist yet, is replaced atomically: written to
 //   a temporary file beside it and renamed into place on commit(), so a failure or an
-//   interrupt leaves the old file (or none), never half a file.
+//   interrupt leaves the old file (or none), never half a file. A replaced file keeps its
+//   permissions; a new one gets 0644.
 // - A symlink is followed (up to 40 links; a relative link is read against the link's
 //   folder) and its final target is the file replaced — the link stays a link, and a
 //   dangling link gets its target created. Nothing but a regular file is ever renamed over.

@@ -53,6 +53,19 @@ TEST(AtomicFile, UncommittedLeavesTheOldFile) {
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"out.csv"});
 }
 
+// A replaced file keeps its permissions (they were reset to 0644); a new one gets 0644.
+TEST(AtomicFile, AReplacedFileKeepsItsPermissions) {
+  TempDir dir;
+  const std::string path = dir.write("out.csv", "old\n");
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  write_file_atomically(path, "new\n");
+  EXPECT_EQ(read_file(path), "new\n");
+  EXPECT_EQ(fs::status(path).permissions(), fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  write_file_atomically(dir.file("fresh.csv"), "new\n");
+  EXPECT_EQ(fs::status(dir.file("fresh.csv")).permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read | fs::perms::others_read);
+}
+
 TEST(AtomicFile, WritesIntoANullDeviceAndLeavesItADevice) {
   TempDir dir;
   const std::string device = dir.file("null");
@@ -257,13 +270,15 @@ TEST(StagedFolder, StagingFoldersOfEndedProcessesAreRemovedByTheNextRun) {
   const std::string ended = fmt::format(".report.partial-{}-0", child);
   const std::string running = fmt::format(".report.partial-{}-7", ::getpid());
   const std::string other = fmt::format(".other.partial-{}-0", child);
-  for (const auto& name : {ended, running, other}) {
+  const std::string nested = fmt::format(".{}.partial-{}-0", ended, child);  // demo's report, staged in its own
+  for (const auto& name : {ended, running, other, nested}) {
     fs::create_directory(dir.path() / name);
     dir.write(name + "/report.html", "half");
   }
   StagedFolder out(dir.file("report"));
   const auto entries = dir.entries();
   EXPECT_EQ(std::count(entries.begin(), entries.end(), ended), 0);
+  EXPECT_EQ(std::count(entries.begin(), entries.end(), nested), 0);
   EXPECT_EQ(std::count(entries.begin(), entries.end(), running), 1);
   EXPECT_EQ(std::count(entries.begin(), entries.end(), other), 1);
 }
