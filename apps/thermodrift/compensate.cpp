@@ -71,6 +71,9 @@ void report_trust(const DriftModel& model, const std::vector<AxisTrust>& trust, 
 int run_compensate(const CompensateArguments& args) {
   if (args.data.files.size() != 1) throw UsageError("compensate takes one --data file");
   const std::string& path = args.data.files.front();
+  // Opened first: a reader of a FIFO gets an end of file, not a wait for ever, when the
+  // model or the log is refused below (a file output is not replaced then).
+  AtomicFile out(args.out, {path, args.model_file});
   DriftModel model = load_drift_model(args.model_file);
   const LogSpec spec = args.data.spec_for(model);
   CsvReader reader(path, spec.csv);
@@ -84,7 +87,6 @@ int run_compensate(const CompensateArguments& args) {
                          : fmt::format("the model reads {} temperature columns: one per axis, then {}", inputs,
                                        fmt::join(model.extra_temperature_columns, ",")));
   }
-  AtomicFile out(args.out, {path, args.model_file});
   auto& stream = out.stream();
   const std::string delimiter(1, reader.delimiter());
   if (reader.has_header()) {

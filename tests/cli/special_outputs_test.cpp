@@ -120,6 +120,19 @@ TEST_F(SpecialOutputs, AFifoReaderGetsTheWholeOutput) {
   EXPECT_EQ(file_type(dir_.file("pipe")), S_IFIFO);
 }
 
+// A log refused before the first row is written: the FIFO's reader gets an end of file
+// (it waited for ever when the output was opened only after the log's columns).
+TEST_F(SpecialOutputs, AFifoReaderGetsAnEndOfFileWhenTheLogIsRefused) {
+  testing::make_fifo(dir_.file("pipe"));
+  const auto result = testing::run_in(
+      dir_, "( timeout 20 cat pipe > got & '" + kBinary +
+                "' compensate --model model.json --data sim.csv --gyro nosuch --out pipe 2> err; echo \"tool $?\"; "
+                "wait $!; echo \"reader $?\" )");
+  EXPECT_EQ(result.out, "tool 2\nreader 0\n") << read_file(dir_.file("err"));
+  EXPECT_EQ(read_file(dir_.file("got")), "");
+  EXPECT_EQ(file_type(dir_.file("pipe")), S_IFIFO);
+}
+
 TEST_F(SpecialOutputs, AReaderThatLeavesEarlyIsAWriteErrorNotASilentDeath) {
   testing::make_fifo(dir_.file("pipe"));
   testing::FifoReader reader(dir_.file("pipe"), 1000);
