@@ -137,11 +137,11 @@ void require_samples(const FeatureTable& table, const Pipeline& pipeline, const 
   const bool thinned = pipeline.decimation > 1 && longest > 2 * pipeline.warm_up_seconds();
   throw DataError(logs.front().source, 0, 0,
                   fmt::format("too little data after the {:g} s warm-up (smoothing {:g} s + rate span "
-                              "{:g} s){}: {} usable samples, at least {} needed; the longest log spans "
+                              "{:g} s){}: {} usable sample{}, at least {} needed; the longest log spans "
                               "{:g} s ({})",
                               pipeline.warm_up_seconds(), pipeline.smooth_seconds, pipeline.rate_span_seconds,
                               thinned ? fmt::format(" and keeping one ready sample in {}", pipeline.decimation) : "",
-                              table.rows(), needed, longest,
+                              table.rows(), table.rows() == 1 ? "" : "s", needed, longest,
                               thinned ? "a smaller --decimate helps" : "a shorter --smooth helps"));
 }
 

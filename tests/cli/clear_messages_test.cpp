@@ -70,7 +70,7 @@ TEST_F(ClearMessages, WholeNumberOptionsSayWhatTheyTake) {
 
 TEST_F(ClearMessages, ADecimationThatLeavesTooFewSamplesSaysSo) {
   expect_refused("fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json --decimate 100000", 3,
-                 "keeping one ready sample in 100000: 1 usable samples, at least 4 needed; the longest log spans "
+                 "keeping one ready sample in 100000: 1 usable sample, at least 4 needed; the longest log spans "
                  "22790 s (a smaller --decimate helps)");
 }
 
