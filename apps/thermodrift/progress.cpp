@@ -16,6 +16,7 @@ ProgressPrinter::~ProgressPrinter() {
 }
 
 bool ProgressPrinter::tuning(std::size_t axis, std::size_t axes, const optim::Progress& progress) {
+  const std::lock_guard lock(mutex_);
   const auto now = std::chrono::steady_clock::now();
   const double done = (static_cast<double>(axis) + progress.fraction_done) / static_cast<double>(axes);
   const double left = done > 0.01 ? progress.elapsed_seconds / progress.fraction_done * (1 - progress.fraction_done) : 0;
@@ -36,6 +37,7 @@ bool ProgressPrinter::tuning(std::size_t axis, std::size_t axes, const optim::Pr
 }
 
 void ProgressPrinter::step(std::size_t axis, std::size_t axes, const std::string& what) {
+  const std::lock_guard lock(mutex_);
   if (drawn_) std::fputc('\n', stderr);
   drawn_ = false;
   fmt::print(stderr, "{}: axis {}/{}: {}\n", what_, axis + 1, axes, what);

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <mutex>
 #include <string>
 
 #include "thermodrift/optim/optimizer.hpp"
@@ -22,6 +23,7 @@ class ProgressPrinter {
   void step(std::size_t axis, std::size_t axes, const std::string& what);
 
  private:
+  std::mutex mutex_;  // the axes are fitted in parallel
   std::string what_;
   bool terminal_;
   bool drawn_ = false;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <exception>
+#include <functional>
 #include <thread>
 #include <algorithm>
 #include <cmath>
@@ -179,32 +180,39 @@ FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_
   return identify_thermal_node(logs, axis, pipeline, options);
 }
 
-}  // namespace
-
-std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
-                                                       const CalibrationOptions& options) {
-  if (logs.empty()) throw UsageError("no log to choose features on");
-  const std::size_t axes = logs.front().axes();
-  std::vector<FeatureSelection> selections(axes);
+// job(axis) for every axis, on up to `threads` threads taking the next axis as each
+// finishes; the first axis' exception is rethrown, whatever the thread count.
+void for_each_axis(std::size_t axes, int threads, const std::function<void(std::size_t)>& job) {
   std::vector<std::exception_ptr> failures(axes);
   std::atomic<std::size_t> next{0};
   auto work = [&] {
     for (std::size_t axis; (axis = next++) < axes;) {
       try {
-        selections[axis] = search_features(logs, axis, make_pipeline(logs, axis, options), options);
+        job(axis);
       } catch (...) {
         failures[axis] = std::current_exception();
       }
     }
   };
-  const std::size_t threads = std::clamp<std::size_t>(static_cast<std::size_t>(std::max(1, options.selection.threads)), 1, axes);
+  const std::size_t count = std::clamp<std::size_t>(static_cast<std::size_t>(std::max(1, threads)), 1, std::max<std::size_t>(1, axes));
   std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(work);
+  for (std::size_t t = 1; t < count; ++t) pool.emplace_back(work);
   work();
   for (auto& thread : pool) thread.join();
   for (const auto& failure : failures) {
-    if (failure) std::rethrow_exception(failure);  // the first axis' error, whatever the thread count
+    if (failure) std::rethrow_exception(failure);
   }
+}
+
+}  // namespace
+
+std::vector<FeatureSelection> select_features_per_axis(const std::vector<ChamberLog>& logs,
+                                                       const CalibrationOptions& options) {
+  if (logs.empty()) throw UsageError("no log to choose features on");
+  std::vector<FeatureSelection> selections(logs.front().axes());
+  for_each_axis(selections.size(), options.selection.threads, [&](std::size_t axis) {
+    selections[axis] = search_features(logs, axis, make_pipeline(logs, axis, options), options);
+  });
   return selections;
 }
 
@@ -491,12 +499,14 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
   calibration.model.rate_hz = spec.rate_hz;
   const auto channels = temperature_channel_per_axis(first);
 
-  // The searches of all axes at once when they may run in parallel (the given ones if any).
-  std::vector<FeatureSelection> searched = options.selections;
-  if (chooses_features(options) && searched.empty() && options.selection.threads > 1) {
-    searched = select_features_per_axis(logs, options);
-  }
-  for (std::size_t axis = 0; axis < first.axes(); ++axis) {
+  const std::vector<FeatureSelection>& searched = options.selections;  // given ones, if any
+  // Each axis' terms, fit and tuning, the axes in parallel like the searches: one axis'
+  // SVR tuning runs while another's search or tuning still does. Each axis' result does
+  // not depend on the thread count; they are put in order.
+  const std::size_t axes = first.axes();
+  std::vector<AxisModel> axis_models(axes);
+  std::vector<AxisCalibration> axis_reports(axes);
+  auto fit_axis = [&](std::size_t axis) {
     options.stop.throw_if_requested("calibration");
     const auto start = std::chrono::steady_clock::now();
     AxisModel axis_model;
@@ -562,9 +572,12 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     fit["training_samples"] = report.training_samples;
     fit["in_sample"] = report.in_sample.to_json();
     axis_model.fit = std::move(fit);
-    calibration.model.axes.push_back(std::move(axis_model));
-    calibration.axes.push_back(report);
-  }
+    axis_models[axis] = std::move(axis_model);
+    axis_reports[axis] = report;
+  };
+  for_each_axis(axes, options.selection.threads, fit_axis);
+  calibration.model.axes = std::move(axis_models);
+  calibration.axes = std::move(axis_reports);
   std::vector<Pipeline> pipelines;
   for (const auto& axis : calibration.model.axes) pipelines.push_back(axis.pipeline);
   calibration.model.extra_temperature_columns = extra_temperature_columns(logs, spec, pipelines);

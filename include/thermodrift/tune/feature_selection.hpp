@@ -61,8 +61,8 @@ struct FeatureSelectionOptions {
   bool node_under_dynamics = true;
   // Asked before each set is scored (both methods): a stop request throws Interrupted.
   StopToken stop;
-  // Axes searched at once by select_features_per_axis (and so by calibrate); each axis'
-  // search is independent, so the result does not depend on it.
+  // Axes searched at once by select_features_per_axis, and searched and fitted at once by
+  // calibrate; each axis' work is independent, so the result does not depend on it.
   int threads = 1;
   // Blocked CV: contiguous blocks in time. Ten, not the tuning's five: with five, each
   // block is a whole regime of a chamber cycle (the hot soak, the cold ramp), and terms
