@@ -261,13 +261,15 @@ std::pair<Model, py::object> fit(const std::vector<std::string>& arguments, cons
   const LogSpec spec = args.data.format == "libsvm" ? LogSpec{} : args.data.spec();
   cli::FitProgress hooks;
   std::exception_ptr callback_error;
+  bool stopped = false;  // the callback said stop: not called again (the axes run in parallel)
   if (!progress.is_none()) {
     auto call = [&](std::size_t axis, std::size_t axes, double fraction, const std::string& message) {
-      py::gil_scoped_acquire gil;
-      if (callback_error) return false;
+      py::gil_scoped_acquire gil;  // also guards callback_error and stopped
+      if (callback_error || stopped) return false;
       try {
         const py::object keep_going = progress(axis, axes, fraction, message);
-        return keep_going.is_none() || keep_going.cast<bool>();
+        stopped = !(keep_going.is_none() || keep_going.cast<bool>());
+        return !stopped;
       } catch (...) {
         callback_error = std::current_exception();
         return false;
