@@ -20,8 +20,9 @@ namespace thermodrift::cli {
 namespace {
 
 // The SVR's C and σ are tuned together or both given (FitRequest's rule): a value that
-// tuning would replace, and a tuning option without tuning, are usage errors.
-void check_svr_parameters(const CLI::App& app) {
+// tuning would replace, and a tuning option without tuning, are usage errors. Returns
+// whether C and σ are tuned.
+bool check_svr_parameters(const CLI::App& app) {
   const bool C = app.count("--C") > 0, width = app.count("--sigma") + app.count("--gamma") > 0;
   if (app.count("--tune")) {
     for (const char* option : {"--C", "--sigma", "--gamma"}) {
@@ -45,12 +46,14 @@ void check_svr_parameters(const CLI::App& app) {
   if (app.count("--epsilon") && app.count("--tune-epsilon")) {
     throw UsageError("--epsilon with --tune-epsilon: tuning chooses ε; give one of them");
   }
+  return !C;
 }
 
 }  // namespace
 
 FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::vector<ChamberLog> logs,
                           const LogSpec& spec, const StopToken& stop, const FitProgress& progress) {
+  bool tuned = false;
   if (args.model != "svr") {
     // Never silently ignored: the SVR's and its tuning's options with another model.
     for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
@@ -59,11 +62,10 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
       if (app.count(option)) throw UsageError(fmt::format("{} applies to --model svr, not {}", option, args.model));
     }
   } else {
-    check_svr_parameters(app);
+    tuned = check_svr_parameters(app);
   }
   const bool auto_features = args.features.size() == 1 && args.features.front() == "auto";
   check_identify(app, args.features);
-  const bool tuned = args.model == "svr" && !(app.count("--C") && app.count("--sigma") + app.count("--gamma"));
   if (app.count("--folds-by") && !auto_features && !tuned) {
     throw UsageError("--folds-by applies to the cross-validation of --features auto and of the SVR's tuning");
   }
