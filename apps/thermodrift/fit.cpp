@@ -10,6 +10,7 @@
 #include "interrupt.hpp"
 #include "output.hpp"
 #include "progress.hpp"
+#include "thermodrift/io/atomic_file.hpp"
 #include "lists.hpp"
 #include "numbers.hpp"
 #include "thermodrift/error.hpp"
@@ -147,10 +148,13 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   progress.tuning = [&](std::size_t axis, std::size_t axes, const optim::Progress& p) { return printer.tuning(axis, axes, p); };
   progress.step = [&](std::size_t axis, std::size_t axes, const std::string& what) { printer.step(axis, axes, what); };
   const LogSpec spec = args.data.format == "libsvm" ? LogSpec{} : args.data.spec();
+  // Opened first: a reader of a FIFO gets an end of file, not a wait for ever, when the
+  // log is refused or the fit stops (a file output is not replaced then).
+  AtomicFile out(args.out, args.data.files);
   FitRun run = fit_from_arguments(args, app, {}, spec, interrupt_token(), progress);
   const Calibration& calibration = run.calibration;
   const std::vector<ChamberLog>& logs = run.logs;
-  save_drift_model(calibration.model, args.out, args.data.files);
+  save_drift_model(calibration.model, out);
   for (const auto& warning : fit_run_warnings(calibration)) warn(warning);
 
   nlohmann::json result = {{"command", "fit"}, {"model_file", args.out}, {"evaluation", "in-sample"}};

@@ -272,16 +272,29 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
   }
 }
 
-void save_drift_model(const DriftModel& model, const std::string& path,
-                      const std::vector<std::string>& inputs) {
+namespace {
+
+// What is written must load: a fit that produced NaN or an absurd number stops here.
+std::string checked_model_text(const DriftModel& model, const std::string& path) {
   const std::string text = to_json(model).dump(1) + "\n";
-  // What is written must load: a fit that produced NaN or an absurd number stops here.
   try {
     drift_model_from_json(nlohmann::json::parse(text), path);
   } catch (const DataError& e) {
     throw Error(fmt::format("{}: the fitted model is not usable, nothing written: {}", path, e.message()));
   }
-  write_file_atomically(path, text, inputs);
+  return text;
+}
+
+}  // namespace
+
+void save_drift_model(const DriftModel& model, const std::string& path,
+                      const std::vector<std::string>& inputs) {
+  write_file_atomically(path, checked_model_text(model, path), inputs);
+}
+
+void save_drift_model(const DriftModel& model, AtomicFile& out) {
+  out.stream() << checked_model_text(model, out.path());
+  out.commit();
 }
 
 DriftModel load_drift_model(const std::string& path) {

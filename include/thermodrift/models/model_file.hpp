@@ -20,6 +20,8 @@
 
 namespace thermodrift {
 
+class AtomicFile;
+
 struct AxisModel {
   std::string name;                // axis label, the gyro column's header name or "column N"
   std::string gyro_column;         // as named to the reader: header name or 1-based index
@@ -68,6 +70,9 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
 
 void save_drift_model(const DriftModel& model, const std::string& path,
                       const std::vector<std::string>& inputs = {});
+// The same into an output opened earlier (a FIFO's reader then gets an end of file when
+// the work before the save fails); commits it.
+void save_drift_model(const DriftModel& model, AtomicFile& out);
 DriftModel load_drift_model(const std::string& path);
 
 }  // namespace thermodrift
