@@ -153,7 +153,7 @@ TEST(ModelFile, TrainingEnvelopeRoundTripsAndIsOptional) {
   EXPECT_FALSE(json["axes"][1].contains("training_envelope"));
   const std::vector<std::pair<std::string, nlohmann::json>> bad = {
       {"min > max", {{"temperature_c", {60.0, 20.0}}}},
-      {"not finite", {{"rate_c_per_min", {-1.0, 1e999}}}},
+      {"not finite", {{"rate_c_per_min", {-1.0, std::numeric_limits<double>::infinity()}}}},
       {"term ranges for 2 terms", {{"terms", {{0.0, 1.0}}}}},
   };
   for (const auto& [what, patch] : bad) {
