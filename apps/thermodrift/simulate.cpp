@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "interrupt.hpp"
 #include "numbers.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
@@ -31,15 +32,15 @@ sim::ChamberRun simulate_law(const SimulateArguments& args) {
   const sim::Setpoint setpoint = sim::draw_profile(sim::parse_profile_kind(args.profile), unit,
                                                    args.profile_seed.value_or(*args.law), args.options.cycles);
   if (args.describe) fmt::print(stderr, "{}", unit.describe());
-  return sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz);
+  return sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz, interrupt_token());
 }
 
 int run_simulate(const SimulateArguments& args) {
   std::string why;
   if (!args.options.IsValid(&why)) throw UsageError(why);
-  const sim::ChamberRun run = args.law ? simulate_law(args) : sim::simulate(args.options);
+  const sim::ChamberRun run = args.law ? simulate_law(args) : sim::simulate(args.options, interrupt_token());
   AtomicFile out(args.out);
-  sim::write_csv(run, out.stream());
+  sim::write_csv(run, out.stream(), interrupt_token());
   out.commit();
   fmt::print(stderr, "thermodrift: wrote {} rows ({:.1f} h, {} cycle{}) to {}\n", run.rows(),
              static_cast<double>(run.rows()) / run.rate_hz / 3600.0, args.options.cycles,

@@ -112,7 +112,7 @@ double expected_noise_floor(const NoiseOptions& noise, double rate_hz, double wi
   return white + bias + quantization;
 }
 
-void write_csv(const ChamberRun& run, std::ostream& out) {
+void write_csv(const ChamberRun& run, std::ostream& out, const StopToken& stop) {
   fmt::memory_buffer line;
   for (std::size_t c = 0; c < run.column_names.size(); ++c) {
     fmt::format_to(std::back_inserter(line), "{}{}", c == 0 ? "" : ",", run.column_names[c]);
@@ -120,6 +120,7 @@ void write_csv(const ChamberRun& run, std::ostream& out) {
   line.push_back('\n');
   out.write(line.data(), static_cast<std::streamsize>(line.size()));
   for (std::size_t k = 0; k < run.rows(); ++k) {
+    if (k % 4096 == 0) stop.throw_if_requested("writing the log");
     line.clear();
     for (std::size_t c = 0; c < run.columns.size(); ++c) {
       if (c == 0) {

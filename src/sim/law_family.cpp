@@ -558,7 +558,8 @@ std::size_t programme_rows(const Setpoint& setpoint, double rate_hz) {
 
 }  // namespace
 
-ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed, double rate_hz) {
+ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed, double rate_hz,
+                         const StopToken& stop) {
   const std::size_t rows = programme_rows(setpoint, rate_hz);
   const double dt = 1.0 / rate_hz;
   ChamberRun run;
@@ -571,6 +572,7 @@ ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uin
   std::vector<LawAxisNoise> noise;
   for (std::uint64_t a = 0; a < 3; ++a) noise.emplace_back(unit.noise, dt, noise_seed, a);
   for (std::size_t k = 0; k < rows; ++k) {
+    if (k % 4096 == 0) stop.throw_if_requested("simulation");
     const double t = static_cast<double>(k) * dt;
     const double air = setpoint.temperature(t);
     run.columns[0][k] = t;

@@ -141,7 +141,7 @@ class AxisNoise {
 
 }  // namespace
 
-ChamberRun simulate(const SimulatorOptions& options) {
+ChamberRun simulate(const SimulatorOptions& options, const StopToken& stop) {
   const ChamberProfile profile(options);  // validates the options
   const double dt_s = 1.0 / options.rate_hz;
   const auto rows = static_cast<std::size_t>(std::llround(std::floor(profile.duration_s() * options.rate_hz + 1e-9)));
@@ -168,6 +168,7 @@ ChamberRun simulate(const SimulatorOptions& options) {
 
   double chamber_c = profile.temperature_c(0.0);
   for (std::size_t k = 0; k < rows; ++k) {
+    if (k % 4096 == 0) stop.throw_if_requested("simulation");
     const double time_s = static_cast<double>(k) * dt_s;
     run.columns[time_col][k] = time_s;
     run.columns[chamber_col][k] = chamber_c;

@@ -101,5 +101,11 @@ TEST(Cancel, FitWithTheGreedySearchStopsOnSigterm) {
                SIGTERM, 143);
 }
 
+TEST(Cancel, SimulateStopsOnCtrlCAndWritesNoLog) {
+  TempDir dir;
+  // 4.5 million rows: several seconds of simulating and writing.
+  expect_stops(dir, {"simulate", "--out", "long.csv", "--cycles", "20", "--rate", "10"}, SIGINT, 130);
+}
+
 }  // namespace
 }  // namespace thermodrift

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/stop_token.hpp"
 #include "thermodrift/sim/options.hpp"
 
 namespace thermodrift::sim {
@@ -65,6 +66,6 @@ double expected_noise_floor(const NoiseOptions& noise, double rate_hz, double wi
 // Writes a header row and one row per sample. Time is written in the shortest form that
 // reads back to the same double; the other values with 9 significant digits, which is
 // exact for the quantized gyro and temperature outputs.
-void write_csv(const ChamberRun& run, std::ostream& out);
+void write_csv(const ChamberRun& run, std::ostream& out, const StopToken& stop = {});
 
 }  // namespace thermodrift::sim

@@ -118,7 +118,7 @@ Setpoint draw_profile(ProfileKind kind, const UnitLaw& unit, std::uint64_t seed,
 // A powered-on unit (every node at the air temperature when switched on) through the
 // programme, sampled at rate_hz: the columns of chamber_run_columns.
 ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed,
-                         double rate_hz = 1.0);
+                         double rate_hz = 1.0, const StopToken& stop = {});
 
 // The law's own regressors: the true internal states each term of an axis' drift multiplies
 // (1, ΔTc, ΔTc², ΔTc³, the tanh step, dTc/dt, the axial gradient and its rate, the radial

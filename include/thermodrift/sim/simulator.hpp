@@ -12,6 +12,7 @@ namespace thermodrift::sim {
 // Runs the whole test. Deterministic given the options: the true drift depends only on
 // the physical options, the noise also on options.seed. Throws UsageError when the
 // options are not valid.
-ChamberRun simulate(const SimulatorOptions& options);
+// Asks `stop` every 4096 rows (Interrupted("simulation stopped")).
+ChamberRun simulate(const SimulatorOptions& options, const StopToken& stop = {});
 
 }  // namespace thermodrift::sim
