@@ -10,10 +10,10 @@
 #include "interrupt.hpp"
 #include "output.hpp"
 #include "progress.hpp"
-#include "thermodrift/io/atomic_file.hpp"
 #include "lists.hpp"
 #include "numbers.hpp"
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/tune/calibration.hpp"
 
 namespace thermodrift::cli {
@@ -55,7 +55,8 @@ bool check_svr_parameters(const CLI::App& app) {
 FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::vector<ChamberLog> logs,
                           const LogSpec& spec, const StopToken& stop, const FitProgress& progress) {
   bool tuned = false;
-  if (args.model != "svr") {
+  const ModelKind kind = *model_kind_named(args.model);  // --model accepts the kinds' names only
+  if (kind != ModelKind::svr) {
     // Never silently ignored: the SVR's and its tuning's options with another model.
     for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
                                "--evaluations", "--folds", "--tune-epsilon", "--max-vectors", "--kernel",
@@ -76,7 +77,7 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
     }
   }
   FitRequest request;  // the library holds the defaults and the rule of when to tune
-  request.model = *model_kind_named(args.model);  // --model accepts the kinds' names only
+  request.model = kind;
   request.smooth_seconds = args.data.smooth;
   if (args.rate_span > 0) request.rate_span_seconds = args.rate_span;
   if (args.decimate > 0) request.decimation = args.decimate;
@@ -226,8 +227,10 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
 
 void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
   args.data.add_to(app, data_required);
-  app.add_option("--model", args.model, "linear, stepwise or svr")
-      ->check(CLI::IsMember({"linear", "stepwise", "svr"}));
+  std::vector<std::string> kinds;
+  for (const ModelKind kind : kModelKinds) kinds.emplace_back(to_string(kind));
+  app.add_option("--model", args.model, fmt::format("{} or {}", fmt::join(kinds.begin(), kinds.end() - 1, ", "), kinds.back()))
+      ->check(CLI::IsMember(kinds));
   app.add_option("--C", args.C, "SVR penalty C")->check(kModelScale);
   app.add_option("--sigma", args.sigma, "RBF width σ, on standardized features")->check(kKernelWidth);
   app.add_option("--gamma", args.gamma, "RBF γ = 1/(2σ²) (libsvm's -g)")->check(kModelScale);
