@@ -34,6 +34,7 @@ int run_compress(const CompressArguments& args) {
   DriftModel compressed = original;
   ReduceOptions reduce;
   reduce.max_vectors = args.max_vectors;
+  reduce.stop = interrupt_token();
   std::size_t svr_axes = 0;
   for (auto& axis : compressed.axes) {
     auto* svr = std::get_if<SvrModel>(&axis.model);
@@ -52,8 +53,8 @@ int run_compress(const CompressArguments& args) {
     double warm_up = 0;
     for (const auto& axis : original.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
     const std::vector<ChamberLog> logs = args.data.read(args.data.spec_for(original), warm_up, interrupt_token());
-    const auto before = evaluate_axes(original, logs, args.settle);
-    const auto after = evaluate_axes(compressed, logs, args.settle);
+    const auto before = evaluate_axes(original, logs, args.settle, interrupt_token());
+    const auto after = evaluate_axes(compressed, logs, args.settle, interrupt_token());
     for (std::size_t a = 0; a < compressed.axes.size(); ++a) {
       auto& fit = compressed.axes[a].fit;
       if (!fit.contains("compressed")) continue;

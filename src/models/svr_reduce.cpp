@@ -70,7 +70,7 @@ LeastSquaresFit fit_at(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, Eigen
 // projection: the gradient at the least-squares coefficients is the partial one). Steps
 // of Barzilai-Borwein length, halved until the residual falls; stops when it no longer does.
 LeastSquaresFit refine_centres(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, LeastSquaresFit fit,
-                               double gamma, std::size_t iterations) {
+                               double gamma, std::size_t iterations, const StopToken& stop) {
   const double n = static_cast<double>(x.rows());
   // ∂mse/∂z_k = −(4γ/n)·β_k·Σ_i r_i K_ik (x_i − z_k)
   const auto gradient = [&](const LeastSquaresFit& at) {
@@ -88,6 +88,7 @@ LeastSquaresFit refine_centres(const Eigen::MatrixXd& x, const Eigen::VectorXd& 
     step = 0.01 / std::sqrt(2.0 * gamma) / norm;
   }
   for (std::size_t iteration = 0; iteration < iterations; ++iteration) {
+    stop.throw_if_requested("model compression");
     bool improved = false;
     for (int halvings = 0; halvings < 30; ++halvings, step /= 2) {
       LeastSquaresFit trial = fit_at(x, y, fit.centres - step * g, gamma);
@@ -143,6 +144,7 @@ ReducedSet reduce_rbf(const RbfDecisionFunction& function, const Eigen::MatrixXd
   std::vector<bool> used(static_cast<std::size_t>(candidates.rows()), false);
   std::vector<Eigen::Index> chosen;
   while (chosen.size() < options.max_vectors) {
+    options.stop.throw_if_requested("model compression");
     const Eigen::VectorXd norms = projected.colwise().squaredNorm().transpose();
     const Eigen::VectorXd dots = projected.transpose() * residual;
     Eigen::Index best = -1;
@@ -168,7 +170,9 @@ ReducedSet reduce_rbf(const RbfDecisionFunction& function, const Eigen::MatrixXd
   Eigen::MatrixXd centres(static_cast<Eigen::Index>(chosen.size()), x.cols());
   for (std::size_t c = 0; c < chosen.size(); ++c) centres.row(static_cast<Eigen::Index>(c)) = candidates.row(chosen[c]);
   LeastSquaresFit fitted = fit_at(x, y, centres, function.gamma);
-  if (options.refine_iterations > 0) fitted = refine_centres(x, y, std::move(fitted), function.gamma, options.refine_iterations);
+  if (options.refine_iterations > 0) {
+    fitted = refine_centres(x, y, std::move(fitted), function.gamma, options.refine_iterations, options.stop);
+  }
   result.function.gamma = function.gamma;
   result.function.support_vectors = fitted.centres;
   result.function.coefficients = fitted.coefficients;

@@ -395,6 +395,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       const double before = in_sample_mse();
       ReduceOptions reduce;
       reduce.max_vectors = *options.max_vectors;
+      reduce.stop = options.stop;
       nlohmann::json record = compress(svr, scaled_features, reduce);
       record["training_mse_before"] = before;
       record["training_mse_after"] = in_sample_mse();

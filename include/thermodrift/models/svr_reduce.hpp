@@ -35,6 +35,7 @@ struct ReduceOptions {
   // Gradient steps that then move the chosen centres off the sample points (pre-images),
   // the coefficients refitted at each; 0 keeps the centres on sample points.
   std::size_t refine_iterations = 300;
+  StopToken stop;  // asked at each centre chosen and each refinement step: throws Interrupted
 
   bool IsValid(std::string* error) const;
 };

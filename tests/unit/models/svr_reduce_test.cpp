@@ -3,6 +3,7 @@
 // support vectors.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <random>
 
@@ -22,6 +23,16 @@ Eigen::MatrixXd trajectory(int count) {
     samples(i, 1) = std::cos(1.3 * t);
   }
   return samples;
+}
+
+// The first `vectors` points as support vectors, coefficients evenly from -1 to 1.
+RbfDecisionFunction evenly_weighted(const Eigen::MatrixXd& points, int vectors, double bias = 0) {
+  RbfDecisionFunction function;
+  function.gamma = 1.0;
+  function.support_vectors = points.topRows(vectors);
+  function.coefficients = Eigen::VectorXd::LinSpaced(vectors, -1, 1);
+  function.bias = bias;
+  return function;
 }
 
 ReduceOptions keep(std::size_t vectors) {
@@ -93,19 +104,13 @@ TEST(ReduceRbf, ApproximatesATrainedSvrAndImprovesWithMoreVectors) {
 
 TEST(ReduceRbf, KeepsASmallFunctionAndIsDeterministic) {
   const Eigen::MatrixXd points = trajectory(300);
-  RbfDecisionFunction small;
-  small.gamma = 1.0;
-  small.support_vectors = points.topRows(5);
-  small.coefficients = Eigen::VectorXd::LinSpaced(5, -1, 1);
-  small.bias = 0.1;
+  const RbfDecisionFunction small = evenly_weighted(points, 5, 0.1);
   const ReducedSet same = reduce_rbf(small, points, keep(5));
   EXPECT_EQ(same.function.support_vectors, small.support_vectors);
   EXPECT_EQ(same.function.coefficients, small.coefficients);
   EXPECT_EQ(same.rms_change, 0);
 
-  RbfDecisionFunction wide = small;
-  wide.support_vectors = points.topRows(60);
-  wide.coefficients = Eigen::VectorXd::LinSpaced(60, -1, 1);
+  const RbfDecisionFunction wide = evenly_weighted(points, 60, 0.1);
   const ReducedSet first = reduce_rbf(wide, points, keep(6));
   const ReducedSet second = reduce_rbf(wide, points, keep(6));
   EXPECT_EQ(first.function.support_vectors, second.function.support_vectors);
@@ -119,6 +124,18 @@ TEST(ReduceRbf, RefusesPointsOfAnotherWidthAndNoVectors) {
   function.coefficients = Eigen::VectorXd::Ones(10);
   EXPECT_THROW(reduce_rbf(function, Eigen::MatrixXd::Zero(20, 3), keep(4)), UsageError);
   EXPECT_THROW(reduce_rbf(function, trajectory(20), keep(0)), UsageError);
+}
+
+// A stop asked for (Ctrl-C in `compress`) ends the reduction with Interrupted, at once.
+TEST(ReduceRbf, StopsWhenAStopIsRequested) {
+  const Eigen::MatrixXd points = trajectory(300);
+  const RbfDecisionFunction function = evenly_weighted(points, 60);
+  std::atomic<bool> stop{true};
+  ReduceOptions options = keep(6);
+  options.stop = StopToken(stop);
+  EXPECT_THROW(reduce_rbf(function, points, options), Interrupted);
+  stop = false;
+  EXPECT_EQ(reduce_rbf(function, points, options).function.support_vectors.rows(), 6);
 }
 
 }  // namespace
