@@ -28,54 +28,14 @@
 
 #include "thermodrift/io/libsvm_reader.hpp"
 #include "thermodrift/models/svr.hpp"
+#include "../tests/support/chamber_like.hpp"
 
 using namespace thermodrift;
 
 namespace {
 
-struct Data {
-  Eigen::MatrixXd samples;
-  Eigen::VectorXd targets;
-};
-
-double standard_deviation(const Eigen::VectorXd& values) {
-  const double mean = values.mean();
-  return std::sqrt((values.array() - mean).square().sum() / static_cast<double>(values.size() - 1));
-}
-
-// Chamber cycles -40..60 °C at ±1 °C/min with 30 min soaks, a sensor lagging 300 s,
-// one sample per 10 s (a 100 s mean decimated); noise 0.1 of the drift's scale.
-Data chamber_like(int count, unsigned seed) {
-  std::mt19937 generator(seed);
-  std::normal_distribution<double> noise(0.0, 1.0);
-  const double ramp = 6000, soak = 1800, period = 2 * (ramp + soak);
-  auto chamber = [&](double t) {
-    const double phase = std::fmod(t, period);
-    if (phase < ramp) return -40 + 100 * phase / ramp;
-    if (phase < ramp + soak) return 60.0;
-    if (phase < 2 * ramp + soak) return 60 - 100 * (phase - ramp - soak) / ramp;
-    return -40.0;
-  };
-  Data data{Eigen::MatrixXd(count, 2), Eigen::VectorXd(count)};
-  double sensor = -40, previous = -40, time = 0;
-  for (int i = 0; i < count; ++i) {
-    for (int second = 0; second < 10; ++second, time += 1) sensor += (chamber(time) - sensor) / 300;
-    const double rate = (sensor - previous) / 10 * 60;
-    previous = sensor;
-    const double delta = sensor - 20;
-    data.samples(i, 0) = delta;
-    data.samples(i, 1) = rate;
-    data.targets(i) = 0.02 * delta + 0.5 * std::tanh(1.5 * rate) +
-                      0.3 * std::exp(-std::pow((delta - 10) / 25, 2)) + 0.15 * rate * delta / 50 +
-                      0.1 * noise(generator);
-  }
-  for (Eigen::Index c = 0; c < 2; ++c) {
-    Eigen::VectorXd column = data.samples.col(c);
-    data.samples.col(c) = (column.array() - column.mean()) / standard_deviation(column);
-  }
-  data.targets = (data.targets.array() - data.targets.mean()) / standard_deviation(data.targets);
-  return data;
-}
+using Data = testing::SvrData;
+using testing::chamber_like;
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -17,59 +17,16 @@
 
 #include "thermodrift/io/libsvm_reader.hpp"
 #include "thermodrift/models/svr.hpp"
+#include "../support/chamber_like.hpp"
 
 namespace thermodrift {
 namespace {
 
 constexpr const char* kSvmTrain = "/usr/bin/svm-train";
 
-struct Data {
-  Eigen::MatrixXd samples;
-  Eigen::VectorXd targets;
-};
-
-double standard_deviation(const Eigen::VectorXd& values) {
-  const double mean = values.mean();
-  return std::sqrt((values.array() - mean).square().sum() / static_cast<double>(values.size() - 1));
-}
-
-void standardize(Data& data) {
-  for (Eigen::Index c = 0; c < data.samples.cols(); ++c) {
-    Eigen::VectorXd column = data.samples.col(c);
-    data.samples.col(c) = (column.array() - column.mean()) / standard_deviation(column);
-  }
-  data.targets = (data.targets.array() - data.targets.mean()) / standard_deviation(data.targets);
-}
-
-// A chamber cycle -40..60 °C at ±1 °C/min with soaks, seen by a sensor lagging 300 s,
-// sampled every 10 s: features ΔT and dT/dt, a smooth nonlinear drift plus noise.
-Data chamber_like(int count, unsigned seed, double noise_level) {
-  std::mt19937 generator(seed);
-  std::normal_distribution<double> noise(0.0, 1.0);
-  const double ramp = 6000, soak = 1800, period = 2 * (ramp + soak);
-  auto chamber = [&](double t) {
-    const double phase = std::fmod(t, period);
-    if (phase < ramp) return -40 + 100 * phase / ramp;
-    if (phase < ramp + soak) return 60.0;
-    if (phase < 2 * ramp + soak) return 60 - 100 * (phase - ramp - soak) / ramp;
-    return -40.0;
-  };
-  Data data{Eigen::MatrixXd(count, 2), Eigen::VectorXd(count)};
-  double sensor = -40, previous = -40, time = 0;
-  for (int i = 0; i < count; ++i) {
-    for (int second = 0; second < 10; ++second, time += 1) sensor += (chamber(time) - sensor) / 300;
-    const double rate = (sensor - previous) / 10 * 60;
-    previous = sensor;
-    const double delta = sensor - 20;
-    data.samples(i, 0) = delta;
-    data.samples(i, 1) = rate;
-    data.targets(i) = 0.02 * delta + 0.5 * std::tanh(1.5 * rate) +
-                      0.3 * std::exp(-std::pow((delta - 10) / 25, 2)) + 0.15 * rate * delta / 50 +
-                      noise_level * noise(generator);
-  }
-  standardize(data);
-  return data;
-}
+using Data = testing::SvrData;
+using testing::chamber_like;
+using testing::standardize;
 
 Data smooth_sine(int count, unsigned seed) {
   std::mt19937 generator(seed);
@@ -259,7 +216,7 @@ void expect_agreement(const Case& test_case) {
   EXPECT_NEAR(-fit.function.bias, libsvm.rho, 1e-3) << "rho";
 
   // Predictions on the training samples and on points between them.
-  const double allowed = test_case.prediction_tolerance * standard_deviation(test_case.data.targets);
+  const double allowed = test_case.prediction_tolerance * testing::sample_standard_deviation(test_case.data.targets);
   const Eigen::VectorXd predicted = fit.function.predict(test_case.data.samples);
   double worst = 0;
   for (Eigen::Index i = 0; i < test_case.data.samples.rows(); ++i) {
