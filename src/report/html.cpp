@@ -142,6 +142,9 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
           ".verdict{background:#fff8e0;border-left:4px solid #e0a000;padding:0.7em 1em}\n"
           "pre{background:#f6f6f6;padding:0.5em;overflow-x:auto;font-size:0.85em}\n</style></head><body>\n";
   page << "<h1>" << escape(summary["title"].get<std::string>()) << "</h1>\n";
+  page << "<p>The paper: Wu Junwei, Miao Lingjuan, Li Fusheng, Shen Jun, <i>Compensation method of FOG temperature "
+          "drift with improved support vector machine</i>, Infrared and Laser Engineering 47(5), 0522003 (2018), "
+          "doi:10.3788/IRLA201847.0522003.</p>\n";
   const auto& data = summary["data"];
   page << "<p>Log <code>" << escape(data["source"].get<std::string>()) << "</code>: " << data["rows"].get<std::size_t>()
        << " rows over " << num(data["duration_s"].get<double>() / 3600.0) << " h at " << num(data["sample_rate_hz"])

@@ -21,7 +21,7 @@ namespace thermodrift {
 
 struct Pipeline {
   static constexpr int kVersion = 1;
-  double smooth_seconds = 100;      // trailing moving-average window on gyro and temperature (seed: 100 s)
+  double smooth_seconds = 100;      // trailing moving-average window on gyro and temperature (the paper: 100 s)
   double rate_span_seconds = 100;   // span of the backward difference giving dT/dt
   double gap_seconds = 0;           // a time step longer than this restarts the warm-up; 0: smooth_seconds (at least 10 s)
   std::size_t decimation = 1;       // fitting keeps every k-th ready sample (neighbours of a 100 s mean are near copies)

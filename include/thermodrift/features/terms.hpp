@@ -3,8 +3,8 @@
 // the lab runs unchanged on the device.
 //
 // Atoms, computed from the smoothed temperature T_s (ΔT = T_s - reference):
-//   dT               ΔT, °C                                                (seed)
-//   rate             (T_s(t) - T_s(t - span)) / span, °C/min                (seed)
+//   dT               ΔT, °C                                                (paper)
+//   rate             (T_s(t) - T_s(t - span)) / span, °C/min                (paper)
 //   lag:TAU          L, a first-order lag of ΔT:  TAU·dL/dt = ΔT - L, °C    (coil temperature)
 //   lagrate:TAU      dL/dt = (ΔT - L)/TAU, °C/min                           (coil rate; its gap to
 //                    the sensor, ΔT - L, is TAU times this)

@@ -22,7 +22,7 @@ namespace thermodrift {
 
 struct CalibrationOptions {
   ModelKind model = ModelKind::linear;
-  double smooth_seconds = 100;             // moving-average window (seed: 100 s)
+  double smooth_seconds = 100;             // moving-average window (the paper: 100 s)
   std::optional<double> rate_span_seconds; // dT/dt span; default: the smoothing window (at least 1 s)
   std::optional<std::size_t> decimation;   // default: about 10 samples per smoothing window
   std::vector<std::string> terms{"dT", "rate"};  // feature terms (the paper's pair); {"auto"}: chosen per axis
