@@ -34,7 +34,8 @@ int run_compress(const CompressArguments& args) {
   DriftModel compressed = original;
   ReduceOptions reduce;
   reduce.max_vectors = args.max_vectors;
-  reduce.stop = interrupt_token();
+  const StopToken stop = interrupt_token();
+  reduce.stop = stop;
   std::size_t svr_axes = 0;
   for (auto& axis : compressed.axes) {
     auto* svr = std::get_if<SvrModel>(&axis.model);
@@ -52,9 +53,9 @@ int run_compress(const CompressArguments& args) {
     if (args.data.format != "csv") throw UsageError("compress --data reads chamber logs (--format csv)");
     double warm_up = 0;
     for (const auto& axis : original.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
-    const std::vector<ChamberLog> logs = args.data.read(args.data.spec_for(original), warm_up, interrupt_token());
-    const auto before = evaluate_axes(original, logs, args.settle, interrupt_token());
-    const auto after = evaluate_axes(compressed, logs, args.settle, interrupt_token());
+    const std::vector<ChamberLog> logs = args.data.read(args.data.spec_for(original), warm_up, stop);
+    const auto before = evaluate_axes(original, logs, args.settle, stop);
+    const auto after = evaluate_axes(compressed, logs, args.settle, stop);
     for (std::size_t a = 0; a < compressed.axes.size(); ++a) {
       auto& fit = compressed.axes[a].fit;
       if (!fit.contains("compressed")) continue;

@@ -27,20 +27,21 @@ struct SimulateArguments {
   bool describe = false;
 };
 
-sim::ChamberRun simulate_law(const SimulateArguments& args) {
+sim::ChamberRun simulate_law(const SimulateArguments& args, const StopToken& stop) {
   const sim::UnitLaw unit = sim::draw_unit(*args.law);
   const sim::Setpoint setpoint = sim::draw_profile(sim::parse_profile_kind(args.profile), unit,
                                                    args.profile_seed.value_or(*args.law), args.options.cycles);
   if (args.describe) fmt::print(stderr, "{}", unit.describe());
-  return sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz, interrupt_token());
+  return sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz, stop);
 }
 
 int run_simulate(const SimulateArguments& args) {
   std::string why;
   if (!args.options.IsValid(&why)) throw UsageError(why);
-  const sim::ChamberRun run = args.law ? simulate_law(args) : sim::simulate(args.options, interrupt_token());
+  const StopToken stop = interrupt_token();
+  const sim::ChamberRun run = args.law ? simulate_law(args, stop) : sim::simulate(args.options, stop);
   AtomicFile out(args.out);
-  sim::write_csv(run, out.stream(), interrupt_token());
+  sim::write_csv(run, out.stream(), stop);
   out.commit();
   fmt::print(stderr, "thermodrift: wrote {} rows ({:.1f} h, {} cycle{}) to {}\n", run.rows(),
              static_cast<double>(run.rows()) / run.rate_hz / 3600.0, args.options.cycles,

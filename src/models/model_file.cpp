@@ -272,28 +272,21 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
   }
 }
 
-namespace {
-
-// What is written must load: a fit that produced NaN or an absurd number stops here.
-std::string checked_model_text(const DriftModel& model, const std::string& path) {
-  const std::string text = to_json(model).dump(1) + "\n";
-  try {
-    drift_model_from_json(nlohmann::json::parse(text), path);
-  } catch (const DataError& e) {
-    throw Error(fmt::format("{}: the fitted model is not usable, nothing written: {}", path, e.message()));
-  }
-  return text;
-}
-
-}  // namespace
-
 void save_drift_model(const DriftModel& model, const std::string& path,
                       const std::vector<std::string>& inputs) {
-  write_file_atomically(path, checked_model_text(model, path), inputs);
+  AtomicFile out(path, inputs);
+  save_drift_model(model, out);
 }
 
 void save_drift_model(const DriftModel& model, AtomicFile& out) {
-  out.stream() << checked_model_text(model, out.path());
+  const std::string text = to_json(model).dump(1) + "\n";
+  // What is written must load: a fit that produced NaN or an absurd number stops here.
+  try {
+    drift_model_from_json(nlohmann::json::parse(text), out.path());
+  } catch (const DataError& e) {
+    throw Error(fmt::format("{}: the fitted model is not usable, nothing written: {}", out.path(), e.message()));
+  }
+  out.stream() << text;
   out.commit();
 }
 
