@@ -24,6 +24,7 @@
 #include "thermodrift/models/svr.hpp"
 #include "thermodrift/models/svr_model.hpp"
 #include "thermodrift/sim/simulator.hpp"
+#include "../tests/support/fitted_model.hpp"
 
 namespace fs = std::filesystem;
 using namespace thermodrift;
@@ -37,33 +38,9 @@ double seconds_since(Clock::time_point start) {
 }
 
 // One model per axis on a 1 Hz cycle: the paper's pipeline, linear or ε-SVR with fixed
-// C = 10, γ = 0.5, ε = 0.05 (standardized units), as the export test fits them.
+// C = 10, γ = 0.5, ε = 0.05 (standardized units), the export tests' fixture.
 DriftModel fit(const ChamberLog& log, ModelKind kind) {
-  DriftModel model;
-  model.time_column = "time_s";
-  for (std::size_t a = 0; a < log.axes(); ++a) {
-    AxisModel axis;
-    axis.name = log.gyro_names[a];
-    axis.gyro_column = log.gyro_names[a];
-    axis.temperature_column = log.temperature_names[a];
-    axis.pipeline.decimation = 10;
-    axis.pipeline.reference_temperature = 20;
-    axis.kind = kind;
-    const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
-    if (kind == ModelKind::linear) {
-      axis.model = fit_least_squares(table.features, table.target, linear_regressors(2));
-    } else {
-      SvrModel svr;
-      svr.scaling = Standardization::of(table.features, table.target);
-      SvrTrainer trainer(SvrOptions{.C = 10, .gamma = 0.5, .epsilon = 0.05});
-      svr.function = trainer.train(svr.scaling.features(table.features), svr.scaling.target(table.target)).function;
-      svr.C = 10;
-      svr.epsilon = 0.05;
-      axis.model = std::move(svr);
-    }
-    model.axes.push_back(std::move(axis));
-  }
-  return model;
+  return testing::fitted_model(log, {.kind = std::string(to_string(kind)), .squares = false});
 }
 
 struct ChildRun {

@@ -237,8 +237,7 @@ struct OracleRows {
 };
 
 OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& regressors, std::size_t axis) {
-  static constexpr std::array<std::string_view, 3> gyro_names = {"gyro_x", "gyro_y", "gyro_z"};
-  const std::vector<double> y = smoothed(run.column(gyro_names[axis]), run.rate_hz);
+  const std::vector<double> y = smoothed(run.column(sim::gyro_columns[axis]), run.rate_hz);
   OracleRows rows{Eigen::MatrixXd(static_cast<Eigen::Index>(y.size()), sim::kLawRegressors),
                   Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()))};
   for (std::size_t j = 0; j < sim::kLawRegressors; ++j) {

@@ -57,10 +57,7 @@ int run_demo(const DemoArguments& args) {
   stop.throw_if_requested("writing the log");
   const double simulate_seconds = seconds_since(start);
   const auto read_start = std::chrono::steady_clock::now();
-  LogSpec spec;
-  spec.time_column = "time_s";
-  spec.gyro_columns = {"gyro_x", "gyro_y", "gyro_z"};
-  spec.temperature_columns = {"temp_x", "temp_y", "temp_z"};
+  const LogSpec spec = sim::log_spec();
   ChamberLog log = read_chamber_log(staged_log_path, spec);
   log.source = log_path;  // as the report and the model files name it
   progress(fmt::format("wrote and read {} ({} rows)", log_path, log.rows()));
@@ -75,7 +72,7 @@ int run_demo(const DemoArguments& args) {
   options.command_line = fmt::format("thermodrift demo --out {} --seed {}", args.out, args.seed);
   if (!args.features.empty()) options.command_line += fmt::format(" --features {}", fmt::join(args.features, ","));
   if (args.identify == FeatureSelectionOptions::Method::greedy) options.command_line += " --identify greedy";
-  for (const char* name : {"drift_x", "drift_y", "drift_z"}) options.true_drift.push_back(run.column(name));
+  for (const std::string_view name : sim::drift_columns) options.true_drift.push_back(run.column(name));
   options.earlier_steps = {{"simulate and write the log", simulate_seconds}, {"read the log", seconds_since(read_start)}};
   options.progress = progress;
   // The default split would be the last 30 %; the demo holds out the whole second cycle.

@@ -37,12 +37,10 @@ std::vector<std::size_t> ChamberRun::cycle_start_rows() const {
 
 std::array<double, 3> ChamberRun::noise_floor(double window_s, std::size_t first_row) const {
   const std::size_t window = window_samples(window_s, rate_hz);
-  static constexpr std::array<std::string_view, 3> gyro_names = {"gyro_x", "gyro_y", "gyro_z"};
-  static constexpr std::array<std::string_view, 3> drift_names = {"drift_x", "drift_y", "drift_z"};
   std::array<double, 3> floor{};
   for (std::size_t axis = 0; axis < 3; ++axis) {
-    const std::vector<double>& gyro = column(gyro_names[axis]);
-    const std::vector<double>& drift = column(drift_names[axis]);
+    const std::vector<double>& gyro = column(gyro_columns[axis]);
+    const std::vector<double>& drift = column(drift_columns[axis]);
     if (gyro.size() < window) throw UsageError("smoothing window is longer than the run");
     if (first_row + 1 >= gyro.size()) throw UsageError("the noise floor needs at least two rows from its first row on");
     // Trailing mean over the last `window` noise samples, kept as a running sum.
@@ -64,24 +62,34 @@ std::array<double, 3> ChamberRun::noise_floor(double window_s, std::size_t first
   return floor;
 }
 
+LogSpec log_spec() {
+  LogSpec spec;
+  spec.time_column = std::string(time_column);
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    spec.gyro_columns.emplace_back(gyro_columns[axis]);
+    spec.temperature_columns.emplace_back(temperature_columns[axis]);
+  }
+  return spec;
+}
+
 ChamberLog to_chamber_log(const ChamberRun& run) {
   ChamberLog log;
   log.source = "simulated";
-  log.time = run.column("time_s");
-  for (const char* axis : {"x", "y", "z"}) {
-    log.gyro_names.push_back(std::string("gyro_") + axis);
-    log.gyro.push_back(run.column(std::string("gyro_") + axis));
-    log.temperature_names.push_back(std::string("temp_") + axis);
-    log.temperature.push_back(run.column(std::string("temp_") + axis));
+  log.time = run.column(time_column);
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    log.gyro_names.emplace_back(gyro_columns[axis]);
+    log.gyro.push_back(run.column(gyro_columns[axis]));
+    log.temperature_names.emplace_back(temperature_columns[axis]);
+    log.temperature.push_back(run.column(temperature_columns[axis]));
   }
   log.line.resize(log.rows());
   for (std::size_t i = 0; i < log.rows(); ++i) log.line[i] = i + 2;  // as write_csv writes it: a header, then rows
   return log;
 }
 
-std::optional<std::vector<std::string>> true_drift_columns(const std::vector<std::string>& gyro_columns) {
+std::optional<std::vector<std::string>> true_drift_columns(const std::vector<std::string>& gyro_names) {
   std::vector<std::string> drift;
-  for (const auto& name : gyro_columns) {
+  for (const auto& name : gyro_names) {
     if (name.rfind("gyro_", 0) != 0) return std::nullopt;
     drift.push_back("drift_" + name.substr(5));
   }

@@ -21,6 +21,11 @@ namespace thermodrift::sim {
 inline constexpr std::array<std::string_view, 11> chamber_run_columns = {
     "time_s", "temp_chamber", "temp_x", "temp_y", "temp_z", "gyro_x",
     "gyro_y", "gyro_z",       "drift_x", "drift_y", "drift_z"};
+// The same names by role, axis by axis (x, y, z): what reading a written run needs.
+inline constexpr std::string_view time_column = "time_s";
+inline constexpr std::array<std::string_view, 3> gyro_columns = {"gyro_x", "gyro_y", "gyro_z"};
+inline constexpr std::array<std::string_view, 3> temperature_columns = {"temp_x", "temp_y", "temp_z"};
+inline constexpr std::array<std::string_view, 3> drift_columns = {"drift_x", "drift_y", "drift_z"};
 inline constexpr std::array<std::string_view, 9> internal_state_columns = {
     "coil_x",     "coil_y",     "coil_z",     "gradient_x",  "gradient_y",
     "gradient_z", "hysteresis_x", "hysteresis_y", "hysteresis_z"};
@@ -51,7 +56,11 @@ struct ChamberRun {
 // The columns a log written by write_csv (`thermodrift simulate`) holds the true drift
 // of each gyro column in: drift_<suffix> for gyro_<suffix>. Nothing when a gyro column is
 // not named so (a log from a chamber, not from the simulator).
-std::optional<std::vector<std::string>> true_drift_columns(const std::vector<std::string>& gyro_columns);
+std::optional<std::vector<std::string>> true_drift_columns(const std::vector<std::string>& gyro_names);
+
+// How to read a log write_csv wrote: its time, gyro and temperature columns by name
+// (the chamber air and the true drift are not inputs).
+LogSpec log_spec();
 
 // The run as the log thermodrift reads (time_s; gyro_x/y/z in °/h; temp_x/y/z, one per
 // axis), without writing it out: line numbers as write_csv would give them.

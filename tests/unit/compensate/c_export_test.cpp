@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "../../support/fitted_model.hpp"
 #include "../../support/temp_dir.hpp"
 #include "thermodrift/compensate/compensator.hpp"
 #include "thermodrift/error.hpp"
@@ -27,6 +28,7 @@ namespace thermodrift {
 namespace {
 
 using testing::TempDir;
+using testing::fitted_model;
 
 ChamberLog simulated_log() {
   sim::SimulatorOptions options;
@@ -45,65 +47,6 @@ ChamberLog without_rows(const ChamberLog& log, std::size_t begin, std::size_t en
   for (auto& column : cut.gyro) erase(column);
   for (auto& column : cut.temperature) erase(column);
   return cut;
-}
-
-Pipeline chamber_pipeline() {
-  Pipeline pipeline;
-  pipeline.smooth_seconds = 100;
-  pipeline.rate_span_seconds = 100;
-  pipeline.decimation = 10;
-  pipeline.reference_temperature = 20;
-  return pipeline;
-}
-
-// One model per axis fitted on the log: "linear" (quadratic regressors, to exercise
-// powers) or "svr" (fixed C, γ, ε; a few hundred support vectors). `node_channels[a]`:
-// the temperature channel axis a's ΔT is computed from (Pipeline::temperature_channel).
-DriftModel fitted_model(const ChamberLog& log, const std::string& kind, const std::vector<std::string>& terms = {},
-                        const std::vector<std::optional<std::size_t>>& node_channels = {}) {
-  DriftModel model;
-  model.time_column = "time_s";
-  for (std::size_t a = 0; a < log.axes(); ++a) {
-    AxisModel axis;
-    axis.name = log.gyro_names[a];
-    axis.gyro_column = log.gyro_names[a];
-    axis.temperature_column = log.temperature_names[a];
-    axis.pipeline = chamber_pipeline();
-    if (!terms.empty()) {
-      axis.pipeline.terms.clear();
-      for (const auto& term : terms) axis.pipeline.terms.push_back(FeatureTerm::parse(term));
-    }
-    if (a < node_channels.size()) axis.pipeline.temperature_channel = node_channels[a];
-    axis.kind = *model_kind_named(kind);
-    const FeatureTable table = build_feature_table(axis.pipeline, log, a, a, true);
-    if (kind == "linear") {
-      axis.model = fit_least_squares(table.features, table.target,
-                                     terms.empty() ? quadratic_regressors(2) : linear_regressors(terms.size()));
-    } else {
-      // "svr", or "partially_linear": least squares on the terms, the SVR on its residual.
-      SvrModel svr;
-      Eigen::VectorXd target = table.target;
-      if (kind == "partially_linear") {
-        svr.linear_part = fit_least_squares(table.features, table.target, linear_regressors(axis.pipeline.terms.size()));
-        target -= svr.linear_part->predict(table.features);
-      }
-      svr.scaling = Standardization::of(table.features, target);
-      SvrTrainer trainer(SvrOptions{.C = 10, .gamma = 0.5, .epsilon = 0.05});
-      svr.function = trainer.train(svr.scaling.features(table.features), svr.scaling.target(target)).function;
-      svr.C = 10;
-      svr.epsilon = 0.05;
-      axis.model = std::move(svr);
-    }
-    model.axes.push_back(std::move(axis));
-  }
-  // Channels after the axes' own, up to the highest a grad term reads.
-  std::size_t used = 0;
-  for (const auto& axis : model.axes) {
-    for (const std::size_t channel : axis.pipeline.channels()) used = std::max(used, channel + 1);
-    used = std::max(used, axis.pipeline.temperature_input(0) + 1);
-  }
-  for (std::size_t c = log.axes(); c < used; ++c) model.extra_temperature_columns.push_back(log.temperature_names[c]);
-  return model;
 }
 
 // The simulated log with the chamber air as a fourth temperature channel.
@@ -258,8 +201,8 @@ class CExport : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     log_ = new ChamberLog(simulated_log());
-    linear_ = new DriftModel(fitted_model(*log_, "linear"));
-    svr_ = new DriftModel(fitted_model(*log_, "svr"));
+    linear_ = new DriftModel(fitted_model(*log_, {.kind = "linear"}));
+    svr_ = new DriftModel(fitted_model(*log_, {.kind = "svr"}));
   }
   static void TearDownTestSuite() {
     delete svr_;
@@ -292,8 +235,8 @@ TEST_F(CExport, ThermalLagTermsMatchCompensatorThroughAGap) {
                                           "gradrate:420:240", "dir:900", "dir:900:420", "dir:900:0:0.07", "dir:600:420:0.5", "dT*rate",
                                           "hinge:420:-15.5", "hinge:420:12", "hinge:420:12^2*rate",
                                           "lead:300", "leadhinge:300:-5", "leadhinge:300:20*dT"};
-  const DriftModel linear = fitted_model(*log_, "linear", terms);
-  const DriftModel svr = fitted_model(*log_, "svr", {"lag:420", "lagrate:420", "dir:900:420"});
+  const DriftModel linear = fitted_model(*log_, {.kind = "linear", .terms = terms});
+  const DriftModel svr = fitted_model(*log_, {.kind = "svr", .terms = {"lag:420", "lagrate:420", "dir:900:420"}});
   const ChamberLog cut = without_rows(*log_, 5000, 5600);
   expect_matches(linear, cut, false, 1e-9);
   expect_matches(linear, cut, true, 1e-4);
@@ -314,7 +257,7 @@ TEST_F(CExport, NodeTermsMatchCompensatorThroughAGap) {
                                           "lagrate:420*dir:60:420:0.05", "lag:420*lagrate:420",
                                           "lag2rate:420:120*dir:60:420:0.05", "lag2:420:120*lag2rate:420:120",
                                           "on:600", "on:1500"};
-  const DriftModel linear = fitted_model(*log_, "linear", terms);
+  const DriftModel linear = fitted_model(*log_, {.kind = "linear", .terms = terms});
   const ChamberLog cut = without_rows(*log_, 5000, 5600);
   expect_matches(linear, cut, false, 1e-9);
   expect_matches(linear, cut, true, 1e-3);
@@ -323,8 +266,9 @@ TEST_F(CExport, NodeTermsMatchCompensatorThroughAGap) {
 // A partially linear SVR (least squares on a thermal node's terms, the kernel on the
 // residual): the header adds the linear part to the kernel sum as the C++ model does.
 TEST_F(CExport, PartiallyLinearSvrMatchesCompensator) {
-  const DriftModel model = fitted_model(*log_, "partially_linear",
-                                        {"lag:420", "hinge:420:-10", "hinge:420:15", "lagrate:420", "rate", "dir:900:420"});
+  const DriftModel model = fitted_model(
+      *log_, {.kind = "partially_linear",
+              .terms = {"lag:420", "hinge:420:-10", "hinge:420:15", "lagrate:420", "rate", "dir:900:420"}});
   ASSERT_TRUE(std::get<SvrModel>(model.axes[0].model).linear_part.has_value());
   expect_matches(model, *log_, false, 1e-9);
   expect_matches(model, *log_, true, 1e-4);
@@ -335,9 +279,9 @@ TEST_F(CExport, PartiallyLinearSvrMatchesCompensator) {
 TEST_F(CExport, ChannelGradientTermsMatchCompensatorThroughAGap) {
   const ChamberLog log = with_chamber_channel(*log_);
   const std::vector<std::string> terms = {"dT", "lag:420", "grad:1-4", "gradrate:1-4", "grad:2-3*dT"};
-  const DriftModel linear = fitted_model(log, "linear", terms);
+  const DriftModel linear = fitted_model(log, {.kind = "linear", .terms = terms});
   ASSERT_EQ(linear.extra_temperature_columns, (std::vector<std::string>{"temp_chamber"}));
-  const DriftModel svr = fitted_model(log, "svr", {"lag:420", "grad:1-4", "gradrate:1-4"});
+  const DriftModel svr = fitted_model(log, {.kind = "svr", .terms = {"lag:420", "grad:1-4", "gradrate:1-4"}});
   const ChamberLog cut = without_rows(log, 5000, 5600);
   expect_matches(linear, cut, false, 1e-9);
   expect_matches(linear, cut, true, 1e-4);
@@ -356,9 +300,9 @@ TEST_F(CExport, ChannelGradientTermsMatchCompensatorThroughAGap) {
 TEST_F(CExport, NodeOnAnotherChannelMatchesCompensator) {
   const ChamberLog log = with_chamber_channel(*log_);
   const std::vector<std::string> terms = {"dT", "lag:420", "lagrate:420", "hinge:420:5", "rate"};
-  const DriftModel linear = fitted_model(log, "linear", terms, {3, 2, std::nullopt});
+  const DriftModel linear = fitted_model(log, {.kind = "linear", .terms = terms, .node_channels = {3, 2, std::nullopt}});
   ASSERT_EQ(linear.extra_temperature_columns, (std::vector<std::string>{"temp_chamber"}));
-  const DriftModel own = fitted_model(log, "linear", terms);
+  const DriftModel own = fitted_model(log, {.kind = "linear", .terms = terms});
   ASSERT_NE(run_compensator(linear, log).compensated, run_compensator(own, log).compensated)
       << "the channel changed nothing";
   const ChamberLog cut = without_rows(log, 5000, 5600);

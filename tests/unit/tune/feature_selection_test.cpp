@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../../support/fitted_model.hpp"
 #include "thermodrift/features/terms.hpp"
 
 namespace thermodrift {
@@ -68,14 +69,7 @@ double time_constant_of(const std::vector<std::string>& terms, FeatureAtom::Kind
   return 0;
 }
 
-Pipeline seed_pipeline() {
-  Pipeline pipeline;
-  pipeline.smooth_seconds = 100;
-  pipeline.rate_span_seconds = 100;
-  pipeline.decimation = 10;
-  pipeline.reference_temperature = 15;
-  return pipeline;
-}
+Pipeline synthetic_pipeline() { return testing::chamber_pipeline(15); }
 
 constexpr double kSmoothedNoiseVariance = 0.25 / 100;  // white 0.5 °/h through a 100-sample mean
 
@@ -85,7 +79,7 @@ TEST(FeatureSelection, FindsTheCoilLagAndItsTimeConstant) {
   const auto log = synthetic_log(600, [](double, double lag, double lag_rate) {
     return 0.08 * lag + 4.0 * lag_rate + 0.002 * lag * lag;
   });
-  const FeatureSelection chosen = select_features({log}, 0, seed_pipeline(), FeatureSelectionOptions{});
+  const FeatureSelection chosen = select_features({log}, 0, synthetic_pipeline(), FeatureSelectionOptions{});
   std::string names;
   for (const auto& term : chosen.terms) names += term + " ";
   bool found_lag = false;
@@ -106,13 +100,13 @@ TEST(FeatureSelection, FindsTheCoilLagAndItsTimeConstant) {
   // The paper's pair on the same data, scored the same way, stays far above.
   FeatureSelectionOptions seed_only;
   seed_only.max_terms = 0;
-  EXPECT_EQ(select_features({log}, 0, seed_pipeline(), seed_only).terms, (std::vector<std::string>{"dT", "rate"}));
+  EXPECT_EQ(select_features({log}, 0, synthetic_pipeline(), seed_only).terms, (std::vector<std::string>{"dT", "rate"}));
 }
 
 // A drift that is ΔT alone: dT first, and the penalty stops the search soon after.
 TEST(FeatureSelection, PenaltyKeepsAPlainLawPlain) {
   const auto log = synthetic_log(600, [](double delta_t, double, double) { return 0.1 * delta_t; });
-  const FeatureSelection chosen = select_features({log}, 0, seed_pipeline(), FeatureSelectionOptions{});
+  const FeatureSelection chosen = select_features({log}, 0, synthetic_pipeline(), FeatureSelectionOptions{});
   ASSERT_FALSE(chosen.terms.empty());
   EXPECT_EQ(chosen.path.front().term, "dT");
   EXPECT_LE(chosen.terms.size(), 2u);
@@ -140,7 +134,7 @@ TEST(FeatureSelection, FindsShupeAndHysteresisTermsOnTheCoilLag) {
   const auto log = synthetic_log(truth, [](double, const std::vector<double>& v) {
     return 0.05 * v[0] + 1.5 * v[1] + 12.0 * v[2] + 0.4 * v[3];
   });
-  const FeatureSelection chosen = select_features({log}, 0, seed_pipeline(), FeatureSelectionOptions{});
+  const FeatureSelection chosen = select_features({log}, 0, synthetic_pipeline(), FeatureSelectionOptions{});
   std::string names;
   for (const auto& term : chosen.terms) names += term + " ";
   using Kind = FeatureAtom::Kind;
@@ -167,7 +161,7 @@ TEST(FeatureSelection, TakesTheGradientToASecondChannelWhenItPays) {
     log.gyro[0][i] = 0.05 * (sensor - 15) + 0.4 * (sensor - mount) + noise(random);
   }
   EXPECT_EQ(channel_candidate_terms(log, 0), (std::vector<std::string>{"grad:1-2", "gradrate:1-2"}));
-  const FeatureSelection chosen = select_features({log}, 0, seed_pipeline(), FeatureSelectionOptions{});
+  const FeatureSelection chosen = select_features({log}, 0, synthetic_pipeline(), FeatureSelectionOptions{});
   std::string names;
   for (const auto& term : chosen.terms) names += term + " ";
   EXPECT_NE(std::find(chosen.terms.begin(), chosen.terms.end(), "grad:1-2"), chosen.terms.end()) << names;
@@ -182,12 +176,12 @@ TEST(FeatureSelection, SvrJudgesTheSetsTheSearchSettledOn) {
   const auto log = synthetic_log(600, [](double, double lag, double lag_rate) {
     return 0.08 * lag + 4.0 * lag_rate + 0.002 * lag * lag;
   });
-  FeatureSelection chosen = select_features({log}, 0, seed_pipeline(), FeatureSelectionOptions{});
+  FeatureSelection chosen = select_features({log}, 0, synthetic_pipeline(), FeatureSelectionOptions{});
   const auto searched = chosen.path;
   SvrJudgeOptions judge;
   judge.tuning = SvrTuningOptions{};
   judge.evaluations = 8;
-  judge_by_svr(chosen, {log}, 0, seed_pipeline(), judge);
+  judge_by_svr(chosen, {log}, 0, synthetic_pipeline(), judge);
   EXPECT_EQ(chosen.scored_by, "least_squares+svr");
   ASSERT_GT(chosen.path.size(), searched.size());
   bool kept_a_judged_set = false;
