@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
     ReduceOptions reduce;
     reduce.max_vectors = 32;
     const Eigen::MatrixXd points = compressed_svr.function.support_vectors;
-    compression_rms.push_back(compress(compressed_svr, points, reduce)["rms_change"].get<double>());
+    compression_rms.push_back(compress(compressed_svr, points, reduce).rms_change);
   }
   const auto& axis = svr_model.axes.front();
   const auto& svr = std::get<SvrModel>(axis.model);

@@ -452,17 +452,17 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
         result.terms[a] = calibration.model.axes[a].pipeline.term_names();
         const auto& channel = calibration.model.axes[a].pipeline.temperature_channel;
         result.temperature_channel[a] = channel ? *channel + 1 : 0;
-        const auto& fit = calibration.model.axes[a].fit;
-        if (fit.contains("feature_selection")) {
-          for (const auto& step : fit.at("feature_selection").at("path")) {
-            if (step.at("action") != "channel") continue;
-            const std::string text = step.at("term").get<std::string>();
+        const auto& selection = calibration.model.axes[a].fit.feature_selection;
+        if (selection) {
+          for (const auto& step : selection->path) {
+            if (step.action != "channel") continue;
+            const std::string& text = step.term;
             std::size_t number = 0;
             double lag_cv = 0;
             const auto at = text.find("(single lag: CV MSE ");
             if (std::sscanf(text.c_str(), "temperature channel %zu", &number) == 1 && at != std::string::npos &&
                 std::sscanf(text.c_str() + at, "(single lag: CV MSE %lf", &lag_cv) == 1) {
-              result.channel_scores[a].push_back({static_cast<double>(number), lag_cv, step.at("cv_mse").get<double>()});
+              result.channel_scores[a].push_back({static_cast<double>(number), lag_cv, step.cv_mse});
             }
           }
         }

@@ -460,7 +460,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("axes", per_axis([](const AxisModel& axis) { return axis.name; }))
       .def_property_readonly("terms", per_axis([](const AxisModel& axis) { return axis.pipeline.term_names(); }))
       .def_property_readonly("params", per_axis([](const AxisModel& axis) {
-                               return json_to_python(axis.fit.value("params", nlohmann::json::object()));
+                               return json_to_python(axis.fit.params ? to_json(*axis.fit.params) : nlohmann::json::object());
                              }))
       .def_property_readonly("kinds", per_axis([](const AxisModel& axis) { return std::string(to_string(axis.kind)); }))
       .def_property_readonly("gyro_columns", per_axis([](const AxisModel& axis) { return axis.gyro_column; }))

@@ -45,7 +45,7 @@ int run_compress(const CompressArguments& args) {
     // reduced set is fitted at them (standardized units, as the function is).
     const Eigen::MatrixXd points = svr->function.support_vectors;
     if (points.rows() < 2) continue;
-    axis.fit["compressed"] = compress(*svr, points, reduce);
+    axis.fit.compressed = compress(*svr, points, reduce);
   }
   if (svr_axes == 0) throw UsageError(fmt::format("{} has no SVR axis: nothing to compress", args.model_file));
 
@@ -57,13 +57,13 @@ int run_compress(const CompressArguments& args) {
     const auto before = evaluate_axes(original, logs, args.settle, stop);
     const auto after = evaluate_axes(compressed, logs, args.settle, stop);
     for (std::size_t a = 0; a < compressed.axes.size(); ++a) {
-      auto& fit = compressed.axes[a].fit;
-      if (!fit.contains("compressed")) continue;
+      auto& record = compressed.axes[a].fit.compressed;
+      if (!record) continue;
       // Kept in the model file with the logs' names, so the figure says what it was measured on.
-      fit["compressed"]["data_mse_before"] = before[a].metrics.mse_after;
-      fit["compressed"]["data_mse_after"] = after[a].metrics.mse_after;
-      fit["compressed"]["data"] = args.data.files;
-      fit["compressed"]["settle_seconds"] = args.settle;
+      record->data_mse_before = before[a].metrics.mse_after;
+      record->data_mse_after = after[a].metrics.mse_after;
+      record->data = args.data.files;
+      record->settle_seconds = args.settle;
     }
   }
   std::vector<std::string> inputs{args.model_file};
@@ -72,11 +72,11 @@ int run_compress(const CompressArguments& args) {
 
   nlohmann::json axes = nlohmann::json::array();
   for (const auto& axis : compressed.axes) {
-    if (!axis.fit.contains("compressed")) continue;
-    const auto& record = axis.fit["compressed"];
-    axes.push_back({{"name", axis.name}, {"compressed", record}});
+    if (!axis.fit.compressed) continue;
+    const CompressionRecord& record = *axis.fit.compressed;
+    axes.push_back({{"name", axis.name}, {"compressed", to_json(record)}});
     if (!args.json) {
-      print_compression(axis.name, record, "data_mse",
+      print_compression(axis.name, record, record.data_mse_before, record.data_mse_after,
                         fmt::format("on {} (held-out if the model was not fitted on it)", fmt::join(args.data.files, ", ")));
     }
   }

@@ -165,20 +165,18 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     nlohmann::json entry = calibration.axes[a].in_sample.to_json();
     entry["name"] = axis.name;
     entry["model"] = axis.kind;
-    entry["params"] = axis.fit.value("params", nlohmann::json::object());
-    entry["evaluations"] = axis.fit.value("evaluations", 1);
+    entry["params"] = axis.fit.params ? to_json(*axis.fit.params) : nlohmann::json::object();
+    entry["evaluations"] = axis.fit.evaluations.value_or(1);
     entry["seconds"] = calibration.axes[a].seconds;
     entry["training_samples"] = calibration.axes[a].training_samples;
     entry["terms"] = axis.pipeline.term_names();
-    if (axis.fit.contains("feature_selection")) {
-      const auto& selection = axis.fit["feature_selection"];
-      entry["feature_selection"] = {{"scored_by", selection["scored_by"]}, {"cv_mse", selection["cv_mse"]},
-                                    {"steps", selection["path"].size()}};
+    if (const auto& selection = axis.fit.feature_selection) {
+      entry["feature_selection"] = {{"scored_by", selection->scored_by}, {"cv_mse", selection->cv_mse},
+                                    {"steps", selection->path.size()}};
     }
-    if (axis.fit.contains("tuning")) {
-      const auto& tuning = axis.fit["tuning"];
-      entry["tuning"] = {{"method", tuning["method"]}, {"objective", tuning["objective"]},
-                         {"objective_mse", tuning["objective_mse"]}, {"optimistic", tuning["optimistic"]},
+    if (const auto& tuning = axis.fit.tuning) {
+      entry["tuning"] = {{"method", tuning->method}, {"objective", tuning->objective},
+                         {"objective_mse", tuning->objective_mse}, {"optimistic", tuning->optimistic},
                          {"seconds", calibration.axes[a].tuning_seconds}};
     }
     if (axis.envelope) {
@@ -188,10 +186,12 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
     }
     add_expected_held_out(entry, axis.fit);
-    if (axis.fit.contains("compressed")) {
-      const auto& compressed = axis.fit["compressed"];
-      entry["compressed"] = compressed;
-      if (!args.json) print_compression(axis.name, compressed, "training_mse", "on the fitted samples, in-sample");
+    if (const auto& compressed = axis.fit.compressed) {
+      entry["compressed"] = to_json(*compressed);
+      if (!args.json) {
+        print_compression(axis.name, *compressed, compressed->training_mse_before, compressed->training_mse_after,
+                          "on the fitted samples, in-sample");
+      }
     }
     axes.push_back(entry);
   }

@@ -9,22 +9,20 @@
 
 namespace thermodrift::cli {
 
-void print_compression(const std::string& axis, const nlohmann::json& compressed, const std::string& mse_key,
-                       const std::string& measured_on) {
+void print_compression(const std::string& axis, const CompressionRecord& compressed, std::optional<double> mse_before,
+                       std::optional<double> mse_after, const std::string& measured_on) {
   std::string mse;
-  if (compressed.contains(mse_key + "_before")) {
-    const double before = compressed[mse_key + "_before"].get<double>();
-    const double after = compressed[mse_key + "_after"].get<double>();
+  if (mse_before && mse_after) {
+    const double before = *mse_before, after = *mse_after;
     mse = fmt::format("; MSE {:.6g} -> {:.6g} (deg/h)^2 ({:+.2f} %) {}", before, after,
                       before > 0 ? 100.0 * (after - before) / before : 0.0, measured_on);
   }
   fmt::print("{}: {} support vectors -> {}; prediction changed by {:.3g} deg/h RMS ({:.3g} at most) at {} points{}\n",
-             axis, compressed["from_vectors"].get<std::size_t>(), compressed["to_vectors"].get<std::size_t>(),
-             compressed["rms_change"].get<double>(), compressed["max_change"].get<double>(),
-             compressed["points"].get<std::size_t>(), mse);
+             axis, compressed.from_vectors, compressed.to_vectors, compressed.rms_change, compressed.max_change,
+             compressed.points, mse);
 }
 
-void add_expected_held_out(nlohmann::json& axis, const nlohmann::json& fit) {
+void add_expected_held_out(nlohmann::json& axis, const FitRecord& fit) {
   const auto estimate = expected_held_out(fit);
   if (!estimate) return;
   nlohmann::json expected = {{"cv_mse", estimate->cv_mse}, {"from", estimate->from}};

@@ -4,8 +4,10 @@
 #include <nlohmann/json.hpp>
 
 #include <string>
+#include <optional>
 
 #include "thermodrift/features/noise_floor.hpp"
+#include "thermodrift/models/fit_record.hpp"
 
 namespace thermodrift::cli {
 
@@ -18,14 +20,13 @@ void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor);
 // Sets an axis' "expected_held_out": the blocked-CV MSE of the fit (the tuning's CV
 // objective, else the feature search's least-squares CV), what it is, and its ratio to the
 // noise-floor estimate when add_noise_floor set one. Nothing when the fit had no CV.
-void add_expected_held_out(nlohmann::json& axis, const nlohmann::json& fit);
+void add_expected_held_out(nlohmann::json& axis, const FitRecord& fit);
 
 // One line on stdout for an axis' compression record (fit.compressed, SvrModel's
 // compress): support vectors before and after, the prediction's change, and the MSE
-// figures `mse_key`_before / `mse_key`_after when the record has them, `measured_on` saying
-// on what.
-void print_compression(const std::string& axis, const nlohmann::json& compressed, const std::string& mse_key,
-                       const std::string& measured_on);
+// before and after when both are given, `measured_on` saying on what.
+void print_compression(const std::string& axis, const CompressionRecord& compressed, std::optional<double> mse_before,
+                       std::optional<double> mse_after, const std::string& measured_on);
 
 // `result` holds an "axes" array (see above); the table also shows, where an axis has
 // them, its training envelope, noise-floor estimate and samples outside the envelope.

@@ -129,7 +129,7 @@ nlohmann::json to_json(const DriftModel& model) {
                             {"pipeline", axis.pipeline.to_json()},
                             {"kind", to_string(axis.kind)},
                             {"model", body},
-                            {"fit", axis.fit}};
+                            {"fit", fit_record_to_json(axis.fit)}};
     if (axis.envelope) entry["training_envelope"] = axis.envelope->to_json();
     axes.push_back(std::move(entry));
   }
@@ -237,7 +237,7 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
         } else {
           axis.model = SvrModel::from_json(entry.at("model"), terms);
         }
-        axis.fit = entry.value("fit", nlohmann::json::object());
+        if (entry.contains("fit")) axis.fit = fit_record_from_json(entry.at("fit"));
         if (entry.contains("training_envelope")) {
           if (axis.pipeline.libsvm) throw Error("a libsvm-format model has no training envelope");
           axis.envelope = TrainingEnvelope::from_json(entry.at("training_envelope"), terms.size());

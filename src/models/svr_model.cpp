@@ -39,17 +39,18 @@ Eigen::VectorXd Standardization::target(const Eigen::VectorXd& raw) const {
   return (raw.array() - target_mean) / target_scale;
 }
 
-nlohmann::json compress(SvrModel& model, const Eigen::MatrixXd& scaled_points, const ReduceOptions& options) {
+CompressionRecord compress(SvrModel& model, const Eigen::MatrixXd& scaled_points, const ReduceOptions& options) {
   const ReducedSet reduced = reduce_rbf(model.function, scaled_points, options);
   model.function = reduced.function;
   const double scale = model.scaling.target_scale;
-  return {{"method", "kernel matching pursuit, least squares at the points"},
-          {"from_vectors", reduced.original_vectors},
-          {"to_vectors", reduced.function.support_vectors.rows()},
-          {"points", reduced.points},
-          {"rms_change", reduced.rms_change * scale},
-          {"max_change", reduced.max_change * scale},
-          {"unit", "deg/h"}};
+  CompressionRecord record;
+  record.method = "kernel matching pursuit, least squares at the points";
+  record.from_vectors = reduced.original_vectors;
+  record.to_vectors = static_cast<std::size_t>(reduced.function.support_vectors.rows());
+  record.points = reduced.points;
+  record.rms_change = reduced.rms_change * scale;
+  record.max_change = reduced.max_change * scale;
+  return record;
 }
 
 double SvrModel::sigma() const { return sigma_of_gamma(function.gamma); }

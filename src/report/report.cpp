@@ -40,35 +40,23 @@ std::string model_label(const ModelStudy& m, std::size_t axis) {
 std::string model_kind_label(const ModelStudy& m, std::size_t axis) {
   if (m.model == ModelKind::linear) return "linear regression";
   if (m.model == ModelKind::stepwise) return "stepwise regression";
-  const auto& fit = m.calibration.model.axes.at(axis).fit;
-  if (fit.contains("tuning") && fit["tuning"].contains("method") && fit["tuning"]["method"].is_string()) {
-    const std::string method = fit["tuning"]["method"].get<std::string>();
-    return "SVR + " + (method == "afsa" ? std::string("AFSA") : method);
+  const auto& tuning = m.calibration.model.axes.at(axis).fit.tuning;
+  if (tuning && !tuning->method.empty()) {
+    return "SVR + " + (tuning->method == "afsa" ? std::string("AFSA") : tuning->method);
   }
   return "SVR (fixed C, σ)";
 }
 
-// The tuning history an SVR fit carries, if it was tuned: fit.tuning.history (calibrate's
-// record), labelled with fit.tuning.method.
-std::vector<TuningHistory> tuning_histories(const nlohmann::json& fit, const std::string& axis) {
+// The tuning history an SVR fit carries, if it was tuned, labelled with its method.
+std::vector<TuningHistory> tuning_histories(const FitRecord& fit, const std::string& axis) {
   std::vector<TuningHistory> out;
-  const auto read = [&](const nlohmann::json& history, const std::string& method) {
-    if (!history.is_array() || history.empty()) return;
-    TuningHistory h;
-    h.label = method + ", " + axis;
-    for (const auto& point : history) {
-      if (point.contains("evaluations") && point.contains("best_value")) {
-        h.points.emplace_back(point["evaluations"].get<double>(), point["best_value"].get<double>());
-      }
-    }
-    if (!h.points.empty()) out.push_back(std::move(h));
-  };
-  if (fit.contains("tuning") && fit["tuning"].is_object()) {
-    const auto& tuning = fit["tuning"];
-    std::string method = "AFSA";
-    if (tuning.contains("method") && tuning["method"].is_string()) method = tuning["method"].get<std::string>();
-    if (tuning.contains("history")) read(tuning["history"], method);
+  if (!fit.tuning || fit.tuning->history.empty()) return out;
+  TuningHistory h;
+  h.label = (fit.tuning->method.empty() ? std::string("AFSA") : fit.tuning->method) + ", " + axis;
+  for (const auto& point : fit.tuning->history) {
+    h.points.emplace_back(static_cast<double>(point.evaluations), point.best_value);
   }
+  out.push_back(std::move(h));
   return out;
 }
 
@@ -260,11 +248,10 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   if (svr_index < study.models.size()) {
     for (const auto& axis : study.models[svr_index].calibration.model.axes) {
       nlohmann::json entry = {{"axis", axis.name}};
-      if (axis.fit.contains("params")) entry["params"] = axis.fit["params"];
-      for (const char* key : {"evaluations", "tuning"}) {
-        if (axis.fit.contains(key)) entry[key] = axis.fit[key];
-      }
-      if (axis.fit.contains("solver")) entry["solver"] = axis.fit["solver"];
+      if (axis.fit.params) entry["params"] = to_json(*axis.fit.params);
+      if (axis.fit.evaluations) entry["evaluations"] = *axis.fit.evaluations;
+      if (axis.fit.tuning) entry["tuning"] = to_json(*axis.fit.tuning);
+      if (axis.fit.solver) entry["solver"] = to_json(*axis.fit.solver);
       svr_params.push_back(entry);
     }
   }
@@ -340,16 +327,15 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   for (std::size_t a = 0; a < axes; ++a) {
     nlohmann::json entry = {{"axis", log.gyro_names[a]}, {"chosen", nlohmann::json::array()}};
     for (const auto& m : study.models) {
-      const auto& fit = m.calibration.model.axes[a].fit;
-      if (!fit.contains("feature_selection")) continue;
-      const auto& selection = fit["feature_selection"];
-      if (!entry.contains("selection") || selection["path"].size() > entry["selection"]["path"].size()) {
-        entry["selection"] = selection;
+      const auto& selection = m.calibration.model.axes[a].fit.feature_selection;
+      if (!selection) continue;
+      if (!entry.contains("selection") || selection->path.size() > entry["selection"]["path"].size()) {
+        entry["selection"] = to_json(*selection);
       }
       entry["chosen"].push_back({{"label", model_kind_label(m, a)},
-                                 {"terms", selection["terms"]},
-                                 {"scored_by", selection["scored_by"]},
-                                 {"cv_mse", selection["cv_mse"]}});
+                                 {"terms", selection->terms},
+                                 {"scored_by", selection->scored_by},
+                                 {"cv_mse", selection->cv_mse}});
     }
     if (entry.contains("selection")) selections.push_back(std::move(entry));
   }

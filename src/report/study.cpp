@@ -21,7 +21,7 @@ nlohmann::json Study::to_json() const {
       axes.push_back({{"name", axis.name},
                       {"in_sample", m.in_sample[a].to_json()},
                       {"held_out", m.held_out[a].to_json()},
-                      {"fit", axis.fit}});
+                      {"fit", fit_record_to_json(axis.fit)}});
     }
     models_json.push_back({{"model", to_string(m.model)}, {"features", m.features}, {"seconds", m.seconds}, {"axes", axes}});
   }

@@ -218,11 +218,11 @@ std::vector<FeatureSelection> select_features_per_axis(const std::vector<Chamber
 
 namespace {
 
-// "blocked 5-fold" or "leave-one-run-out (2 runs)", from a record with folds and folds_by.
-std::string cv_name(const nlohmann::json& record) {
+// "blocked 5-fold" or "leave-one-run-out (2 runs)", from a record's folds and folds_by.
+std::string cv_name(std::size_t folds, const std::string& folds_by) {
   HeldOutBlocks blocks;
-  blocks.blocks.resize(record.value("folds", std::size_t{0}));
-  blocks.by = parse_folds_by(record.value("folds_by", std::string("time")));
+  blocks.blocks.resize(folds);
+  blocks.by = parse_folds_by(folds_by);
   return blocks.describe();
 }
 
@@ -231,11 +231,10 @@ std::string cv_name(const nlohmann::json& record) {
 std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetrics& in_sample) {
   std::vector<std::string> warnings;
   if (const auto* svr = std::get_if<SvrModel>(&axis.model); svr != nullptr && !svr->converged) {
-    const auto& solver = axis.fit.value("solver", nlohmann::json::object());
     warnings.push_back(fmt::format(
         "{}: the SVR stopped at its iteration cap ({} steps) before converging: usable, not optimal; a smaller C "
         "or a looser --tol converges",
-        axis.name, solver.value("iterations", 0L)));
+        axis.name, axis.fit.solver ? axis.fit.solver->iterations : 0L));
   }
   if (in_sample.samples > 0 && in_sample.mse_after > in_sample.mse_before) {
     warnings.push_back(fmt::format(
@@ -246,14 +245,15 @@ std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetri
   return warnings;
 }
 
-std::optional<ExpectedHeldOut> expected_held_out(const nlohmann::json& fit) {
-  if (fit.contains("tuning") && fit["tuning"].value("objective", "") == "cv") {
-    return ExpectedHeldOut{fit["tuning"]["objective_mse"].get<double>(),
-                           fmt::format("the tuned SVR's {} CV", cv_name(fit["tuning"]))};
+std::optional<ExpectedHeldOut> expected_held_out(const FitRecord& fit) {
+  if (fit.tuning && fit.tuning->objective == "cv") {
+    return ExpectedHeldOut{fit.tuning->objective_mse,
+                           fmt::format("the tuned SVR's {} CV", cv_name(fit.tuning->folds, fit.tuning->folds_by))};
   }
-  if (fit.contains("feature_selection")) {
-    return ExpectedHeldOut{fit["feature_selection"]["cv_mse"].get<double>(),
-                           fmt::format("the feature search's {} least-squares CV", cv_name(fit["feature_selection"]))};
+  if (fit.feature_selection) {
+    const SelectionRecord& selection = *fit.feature_selection;
+    return ExpectedHeldOut{selection.cv_mse, fmt::format("the feature search's {} least-squares CV",
+                                                         cv_name(selection.folds, selection.folds_by))};
   }
   return std::nullopt;
 }
@@ -319,8 +319,8 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
                       bool standardize, std::size_t axis, const LinearModel* linear_fit) {
   FittedModel fitted;
-  fitted.fit = {{"terms", terms}};
-  if (linear_fit && options.model != ModelKind::stepwise) fitted.fit["averaged_linear_part"] = true;
+  fitted.fit.terms = terms;
+  fitted.fit.averaged_linear_part = linear_fit != nullptr && options.model != ModelKind::stepwise;
   if (options.model == ModelKind::linear) {
     fitted.model = linear_fit ? *linear_fit : fit_least_squares(features, target, linear_regressors(terms.size()));
   } else if (options.model == ModelKind::stepwise) {
@@ -328,11 +328,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                                  options.partially_linear ? linear_regressors(terms.size())
                                                           : quadratic_regressors(terms.size()),
                                  terms);
-    nlohmann::json path = nlohmann::json::array();
-    for (const auto& step : stepwise.path) {
-      path.push_back({{"action", step.action}, {"regressor", step.regressor}, {"F", step.f_statistic}});
-    }
-    fitted.fit["stepwise_path"] = path;
+    for (const auto& step : stepwise.path) fitted.fit.stepwise_path.push_back({step.action, step.regressor, step.f_statistic});
     fitted.model = std::move(stepwise.model);
   } else if (options.model == ModelKind::svr) {
     SvrModel svr;
@@ -342,7 +338,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
                                    : fit_least_squares(features, target,
                                                        linear_regressors(static_cast<std::size_t>(features.cols())));
       kernel_target -= svr.linear_part->predict(features);
-      fitted.fit["partially_linear"] = true;
+      fitted.fit.partially_linear = true;
     }
     svr.scaling = standardize ? Standardization::of(features, kernel_target)
                               : Standardization::identity(features.cols());
@@ -362,26 +358,23 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       solver = tuned.solver;
       fitted.tuning_seconds = tuned.seconds;
       evaluations = tuned.evaluations;
-      nlohmann::json history = nlohmann::json::array();
-      for (const auto& point : tuned.history) {
-        history.push_back({{"evaluations", point.evaluations},
-                           {"best_value", point.best_value * svr.scaling.target_scale * svr.scaling.target_scale}});
-      }
-      fitted.fit["tuning"] = {{"method", to_string(tuning.method)},
-                              {"objective", to_string(tuned.objective)},
-                              {"optimistic", tuned.optimistic},
-                              {"folds", tuning.blocks.empty() ? std::size_t(tuning.folds) : tuning.blocks.size()},
-                              {"folds_by", tuning.blocks.empty() ? "time" : "runs"},
-                              {"objective_mse", tuned.objective_value * svr.scaling.target_scale * svr.scaling.target_scale},
-                              {"objective_unit", "(deg/h)^2"},
-                              {"fits", tuned.fits},
-                              {"capped_fits", tuned.capped_fits},
-                              {"seed", tuning.seed},
-                              {"box", {{"C", {tuning.C_min, tuning.C_max}},
-                                       {"sigma", {tuning.sigma_min, tuning.sigma_max}},
-                                       {"epsilon", tuning.tune_epsilon ? nlohmann::json{tuning.epsilon_min, tuning.epsilon_max}
-                                                                       : nlohmann::json(tuning.epsilon)}}},
-                              {"history", history}};
+      const auto in_dph2 = [scale = svr.scaling.target_scale](double value) { return value * scale * scale; };  // (°/h)²
+      TuningRecord record;
+      record.method = to_string(tuning.method);
+      record.objective = to_string(tuned.objective);
+      record.optimistic = tuned.optimistic;
+      record.folds = tuning.blocks.empty() ? static_cast<std::size_t>(tuning.folds) : tuning.blocks.size();
+      record.folds_by = tuning.blocks.empty() ? "time" : "runs";
+      record.objective_mse = in_dph2(tuned.objective_value);
+      record.fits = tuned.fits;
+      record.capped_fits = tuned.capped_fits;
+      record.seed = tuning.seed;
+      record.C_box = {tuning.C_min, tuning.C_max};
+      record.sigma_box = {tuning.sigma_min, tuning.sigma_max};
+      if (tuning.tune_epsilon) record.epsilon_box = std::array<double, 2>{tuning.epsilon_min, tuning.epsilon_max};
+      record.epsilon = tuning.epsilon;
+      for (const auto& point : tuned.history) record.history.push_back({point.evaluations, in_dph2(point.best_value)});
+      fitted.fit.tuning = std::move(record);
     }
     const SvrTrainer trainer(solver);
     const SvrFit result = trainer.train(scaled_features, scaled_target);
@@ -396,32 +389,33 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       ReduceOptions reduce;
       reduce.max_vectors = *options.max_vectors;
       reduce.stop = options.stop;
-      nlohmann::json record = compress(svr, scaled_features, reduce);
-      record["training_mse_before"] = before;
-      record["training_mse_after"] = in_sample_mse();
-      record["training_mse_unit"] = "(deg/h)^2";
-      fitted.fit["compressed"] = std::move(record);
+      CompressionRecord record = compress(svr, scaled_features, reduce);
+      record.training_mse_before = before;
+      record.training_mse_after = in_sample_mse();
+      fitted.fit.compressed = std::move(record);
     }
     svr.C = solver.C;
     svr.epsilon = solver.epsilon;
     svr.converged = result.summary.termination == SvrTermination::converged;
-    fitted.fit["params"] = {{"C", svr.C}, {"sigma", svr.sigma()}, {"gamma", svr.function.gamma}, {"epsilon", svr.epsilon}};
-    fitted.fit["standardized"] = standardize;
-    fitted.fit["solver"] = {{"termination", to_string(result.summary.termination)},
-                            {"iterations", result.summary.iterations},
-                            {"support_vectors", result.summary.support_vectors},
-                            {"dual_objective", result.summary.dual_objective},
-                            {"kernel", to_string(result.summary.approximation)}};
+    fitted.fit.params = SvrParameters{svr.C, svr.sigma(), svr.function.gamma, svr.epsilon};
+    fitted.fit.standardized = standardize;
+    SolverRecord solver_record;
+    solver_record.termination = to_string(result.summary.termination);
+    solver_record.iterations = result.summary.iterations;
+    solver_record.support_vectors = result.summary.support_vectors;
+    solver_record.dual_objective = result.summary.dual_objective;
+    solver_record.kernel = to_string(result.summary.approximation);
     if (result.summary.approximation == SvrApproximation::nystrom ||
         result.summary.approximation == SvrApproximation::low_rank) {
       // The factor and what it cost, for whoever reads the model: its rank (the landmarks
       // are the support vectors) and the kernel it leaves unexplained (low rank: none that
       // counts, the fit is the exact one).
-      fitted.fit["solver"]["landmarks"] = result.summary.landmarks;
-      fitted.fit["solver"]["mean_kernel_residual"] = result.summary.kernel_residual;
-      fitted.fit["solver"]["samples_outside_tube"] = result.summary.support_vectors;
+      solver_record.landmarks = result.summary.landmarks;
+      solver_record.mean_kernel_residual = result.summary.kernel_residual;
+      solver_record.samples_outside_tube = result.summary.support_vectors;
     }
-    fitted.fit["evaluations"] = evaluations;
+    fitted.fit.solver = std::move(solver_record);
+    fitted.fit.evaluations = evaluations;
     fitted.model = std::move(svr);
   }
   return fitted;
@@ -446,8 +440,8 @@ Calibration calibrate_libsvm(const LabelledData& data, const std::string& source
   report.in_sample = residual_metrics(data.targets, axis.predict(data.samples));
   report.training_samples = static_cast<std::size_t>(data.samples.rows());
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  fitted.fit["training_samples"] = report.training_samples;
-  fitted.fit["in_sample"] = report.in_sample.to_json();
+  fitted.fit.training_samples = report.training_samples;
+  fitted.fit.in_sample = report.in_sample;
   axis.fit = std::move(fitted.fit);
   Calibration calibration;
   calibration.model.axes.push_back(std::move(axis));
@@ -519,7 +513,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                                         : spec.temperature_columns[channel];
     axis_model.pipeline = make_pipeline(logs, axis, options);
     axis_model.kind = options.model;
-    nlohmann::json selection_json;
+    std::optional<SelectionRecord> selection_record;
     std::optional<LinearModel> linear_fit;
     if (chooses_features(options)) {
       const FeatureSelectionOptions& selection_options = options.selection;
@@ -540,7 +534,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
       for (const auto& term : selection.terms) axis_model.pipeline.terms.push_back(FeatureTerm::parse(term));
       axis_model.pipeline.temperature_channel = selection.temperature_channel;
       axis_model.pipeline.validate();
-      selection_json = selection.to_json(selection_options);
+      selection_record = selection.record(selection_options);
       linear_fit = std::move(selection.linear_fit);
     }
     const auto& pipeline = axis_model.pipeline;
@@ -560,8 +554,8 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
         fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis,
                   linear_fit ? &*linear_fit : nullptr);
     axis_model.model = std::move(fitted.model);
-    nlohmann::json fit = std::move(fitted.fit);
-    if (!selection_json.is_null()) fit["feature_selection"] = std::move(selection_json);
+    FitRecord fit = std::move(fitted.fit);
+    fit.feature_selection = std::move(selection_record);
 
     AxisCalibration report;
     const FeatureTable every = feature_table(logs, pipeline, axis, false);
@@ -570,8 +564,8 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     report.training_samples = training.rows();
     report.tuning_seconds = fitted.tuning_seconds;
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    fit["training_samples"] = report.training_samples;
-    fit["in_sample"] = report.in_sample.to_json();
+    fit.training_samples = report.training_samples;
+    fit.in_sample = report.in_sample;
     axis_model.fit = std::move(fit);
     axis_models[axis] = std::move(axis_model);
     axis_reports[axis] = report;

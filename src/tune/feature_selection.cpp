@@ -101,27 +101,25 @@ std::vector<std::string> channel_candidate_terms(const ChamberLog& log, std::siz
   return out;
 }
 
-nlohmann::json FeatureSelection::to_json(const FeatureSelectionOptions& options) const {
-  nlohmann::json steps = nlohmann::json::array();
-  for (const auto& step : path) {
-    steps.push_back({{"action", step.action}, {"term", step.term}, {"cv_mse", step.cv_mse}, {"terms", step.terms}});
+SelectionRecord FeatureSelection::record(const FeatureSelectionOptions& options) const {
+  SelectionRecord out;
+  const bool thermal_node = options.method == FeatureSelectionOptions::Method::thermal_node;
+  out.method = thermal_node ? "thermal_node" : "greedy";
+  out.scored_by = scored_by;
+  out.folds = held_out.blocks.size();
+  out.folds_by = to_string(held_out.by);
+  out.min_gain = options.min_gain;
+  out.start_mse = start_mse;
+  out.cv_mse = cv_mse;
+  out.candidates_scored = candidates_scored;
+  out.terms = terms;
+  for (const auto& step : path) out.path.push_back({step.action, step.term, step.cv_mse, step.terms});
+  if (temperature_channel) out.temperature_channel = *temperature_channel + 1;
+  if (thermal_node) {
+    out.power_on_start = options.power_on_start;
+    out.node_under_dynamics = options.node_under_dynamics;
   }
-  nlohmann::json json = {{"method", options.method == FeatureSelectionOptions::Method::thermal_node ? "thermal_node" : "greedy"},
-                         {"scored_by", scored_by},
-                         {"folds", held_out.blocks.size()},
-                         {"folds_by", to_string(held_out.by)},
-                         {"min_gain", options.min_gain},
-                         {"start_mse", start_mse},
-                         {"cv_mse", cv_mse},
-                         {"candidates_scored", candidates_scored},
-                         {"terms", terms},
-                         {"path", steps}};
-  if (temperature_channel) json["temperature_channel"] = *temperature_channel + 1;
-  if (options.method == FeatureSelectionOptions::Method::thermal_node) {
-    json["power_on_start"] = options.power_on_start;
-    json["node_under_dynamics"] = options.node_under_dynamics;
-  }
-  return json;
+  return out;
 }
 
 namespace {

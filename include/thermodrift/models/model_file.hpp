@@ -14,6 +14,7 @@
 #include "thermodrift/features/envelope.hpp"
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/models/fit_record.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/model_kind.hpp"
 #include "thermodrift/models/svr_model.hpp"
@@ -29,7 +30,7 @@ struct AxisModel {
   Pipeline pipeline;
   ModelKind kind = ModelKind::linear;
   std::variant<LinearModel, SvrModel> model;
-  nlohmann::json fit;              // how it was fitted: parameters, metrics, timings (informational)
+  FitRecord fit;                   // how it was fitted: what was tuned, how, with what result (informational)
   // What the training logs covered (features/envelope.hpp); absent in files written
   // before it was recorded and for libsvm-format models.
   std::optional<TrainingEnvelope> envelope;

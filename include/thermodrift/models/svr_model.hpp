@@ -12,6 +12,7 @@
 
 #include <Eigen/Dense>
 
+#include "thermodrift/models/fit_record.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/svr.hpp"
 #include "thermodrift/models/svr_reduce.hpp"
@@ -53,9 +54,10 @@ struct SvrModel {
 };
 
 // Replaces the model's decision function by its reduced set (models/svr_reduce.hpp) fitted
-// at `scaled_points` (standardized features, one sample per row) and returns what is stored
-// under the axis' fit.compressed: vectors before and after, and the change of the prediction
-// at those points in the target's units (°/h). A model within the budget is left as it is.
-nlohmann::json compress(SvrModel& model, const Eigen::MatrixXd& scaled_points, const ReduceOptions& options);
+// at `scaled_points` (standardized features, one sample per row) and returns the record of
+// it the axis' fit keeps (FitRecord::compressed): vectors before and after, and the change
+// of the prediction at those points in the target's units (°/h). A model within the budget
+// is left as it is.
+CompressionRecord compress(SvrModel& model, const Eigen::MatrixXd& scaled_points, const ReduceOptions& options);
 
 }  // namespace thermodrift

@@ -110,7 +110,7 @@ struct ExpectedHeldOut {
   double cv_mse = 0;
   std::string from;
 };
-std::optional<ExpectedHeldOut> expected_held_out(const nlohmann::json& fit);
+std::optional<ExpectedHeldOut> expected_held_out(const FitRecord& fit);
 
 // The least-squares selection of every axis of `logs` (terms {"auto"}), with the
 // pipeline calibrate would build; the study shares it among the models it fits.
@@ -150,7 +150,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
 // the same bytes on every run and with any thread count.
 struct FittedModel {
   std::variant<LinearModel, SvrModel> model;
-  nlohmann::json fit;
+  FitRecord fit;
   double tuning_seconds = 0;
 };
 // `axis` labels tuning progress. `linear_fit`, when given (an identification's averaged

@@ -17,6 +17,7 @@
 
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/models/fit_record.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/stop_token.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
@@ -118,7 +119,7 @@ struct FeatureSelection {
   // (Pipeline::temperature_channel).
   std::optional<std::size_t> temperature_channel;
 
-  nlohmann::json to_json(const FeatureSelectionOptions& options) const;
+  SelectionRecord record(const FeatureSelectionOptions& options) const;
 };
 
 // The candidate terms the greedy search starts from (before conditional ones such as

@@ -34,8 +34,8 @@ TEST(CrossAxis, FitsWithTheLeftOutAxisHyperParametersUntuned) {
     EXPECT_EQ(pooled.C, own.C) << result.left_out_name;
     EXPECT_EQ(pooled.function.gamma, own.function.gamma) << result.left_out_name;
     EXPECT_EQ(pooled.epsilon, own.epsilon) << result.left_out_name;
-    EXPECT_FALSE(result.model.fit.contains("tuning")) << result.left_out_name;
-    EXPECT_EQ(result.model.fit["evaluations"], 1) << result.left_out_name;
+    EXPECT_FALSE(result.model.fit.tuning.has_value()) << result.left_out_name;
+    EXPECT_EQ(result.model.fit.evaluations, std::optional<long>(1)) << result.left_out_name;
   }
 }
 

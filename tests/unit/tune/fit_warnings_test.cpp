@@ -26,7 +26,7 @@ TEST(FitWarnings, NamesAnUnconvergedSvrAndAModelWorseThanABias) {
   SvrModel svr;
   svr.converged = false;
   axis.model = svr;
-  axis.fit = {{"solver", {{"iterations", 400000}}}};
+  axis.fit.solver = SolverRecord{.iterations = 400000};
   const auto capped = fit_warnings(axis, metrics(1.0, 0.2));
   ASSERT_EQ(capped.size(), 1u);
   EXPECT_NE(capped[0].find("stopped at its iteration cap (400000 steps)"), std::string::npos) << capped[0];

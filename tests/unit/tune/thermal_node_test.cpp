@@ -92,16 +92,16 @@ bool has_atom(const Pipeline& pipeline, FeatureAtom::Kind kind, double* level = 
 // terms of the training log, and the blocked CV of that mean is at most the mean of theirs.
 // Returns whether the axis was averaged.
 bool check_average(const AxisModel& axis, const ChamberLog& training, std::size_t a) {
-  const auto& path = axis.fit.at("feature_selection").at("path");
+  const auto& path = axis.fit.feature_selection.value().path;
   std::vector<std::vector<std::string>> member_terms;
   std::vector<double> member_cv;
   std::string kept;
   for (const auto& step : path) {
-    if (step.at("action") == "member") {
-      member_terms.push_back(step.at("terms").get<std::vector<std::string>>());
-      member_cv.push_back(step.at("cv_mse").get<double>());
+    if (step.action == "member") {
+      member_terms.push_back(step.terms);
+      member_cv.push_back(step.cv_mse);
     }
-    if (step.at("action") == "average") kept = step.at("term").get<std::string>();
+    if (step.action == "average") kept = step.term;
   }
   EXPECT_GE(member_terms.size(), 3u) << "one search per memory rate scale at least";
   if (kept.empty()) return false;
@@ -125,7 +125,7 @@ bool check_average(const AxisModel& axis, const ChamberLog& training, std::size_
   EXPECT_GE(count, 2);
   mean /= count;
   EXPECT_LT((averaged - mean).cwiseAbs().maxCoeff(), 1e-6 * averaged.cwiseAbs().maxCoeff());
-  EXPECT_LE(axis.fit.at("feature_selection").at("cv_mse").get<double>(), mean_cv / count * (1 + 1e-12));
+  EXPECT_LE(axis.fit.feature_selection.value().cv_mse, mean_cv / count * (1 + 1e-12));
   return true;
 }
 
@@ -335,11 +335,11 @@ TEST(ThermalNode, SearchesTheNodeAndItsThermometerAgainUnderItsDynamicTerms) {
     options.selection.node_under_dynamics = again;
     const Calibration calibration = calibrate({training}, LogSpec{}, options);
     const AxisModel& axis = calibration.model.axes[0];
-    const auto& selection = axis.fit.at("feature_selection");
-    cv[again ? 0 : 1] = selection.at("cv_mse").get<double>();
-    for (const auto& step : selection.at("path")) {
-      renoded[again ? 0 : 1] |= step.at("action") == "renode";
-      if (again && step.at("action") == "channel") channel_step = step.at("term").get<std::string>();
+    const SelectionRecord& selection = axis.fit.feature_selection.value();
+    cv[again ? 0 : 1] = selection.cv_mse;
+    for (const auto& step : selection.path) {
+      renoded[again ? 0 : 1] |= step.action == "renode";
+      if (again && step.action == "channel") channel_step = step.term;
     }
     own_channel[again ? 0 : 1] = !axis.pipeline.temperature_channel.has_value();
     ratio[again ? 0 : 1] = evaluate(calibration.model, {other}, 1800)[0].mse_after / floor;
