@@ -20,24 +20,12 @@ namespace thermodrift::cli {
 
 namespace {
 
-// The SVR's C and σ are tuned together or both given (FitRequest's rule): a value that
-// tuning would replace, and a tuning option without tuning, are usage errors. Returns
-// whether C and σ are tuned.
+// The SVR's C and σ are tuned together or both given (calibration_options refuses a value
+// tuning would replace); a tuning option given without tuning is a usage error too, which
+// only the command line can tell from its default. Returns whether C and σ are tuned.
 bool check_svr_parameters(const CLI::App& app) {
-  const bool C = app.count("--C") > 0, width = app.count("--sigma") + app.count("--gamma") > 0;
-  if (app.count("--tune")) {
-    for (const char* option : {"--C", "--sigma", "--gamma"}) {
-      if (app.count(option)) {
-        throw UsageError(fmt::format("{} with --tune: tuning chooses C and σ; give --tune, or --C with --sigma "
-                                     "(or --gamma) to fix both",
-                                     option));
-      }
-    }
-  } else if (C != width) {
-    throw UsageError(fmt::format("{} alone would be replaced: C and σ are tuned together; give --C with --sigma "
-                                 "(or --gamma) to fix both",
-                                 C ? "--C" : (app.count("--sigma") ? "--sigma" : "--gamma")));
-  } else if (C) {
+  const bool fixed = app.count("--C") > 0 && app.count("--sigma") + app.count("--gamma") > 0 && !app.count("--tune");
+  if (fixed) {
     for (const char* option : {"--objective", "--evaluations", "--folds", "--tune-epsilon"}) {
       if (app.count(option)) {
         throw UsageError(fmt::format("{} applies when C and σ are tuned, not with --C and --sigma given", option));
@@ -47,7 +35,7 @@ bool check_svr_parameters(const CLI::App& app) {
   if (app.count("--epsilon") && app.count("--tune-epsilon")) {
     throw UsageError("--epsilon with --tune-epsilon: tuning chooses ε; give one of them");
   }
-  return !C;
+  return !fixed;
 }
 
 }  // namespace

@@ -275,6 +275,20 @@ CalibrationOptions calibration_options(const FitRequest& request) {
   options.stop = request.stop;
   if (request.model != ModelKind::svr) return options;
   if (request.sigma && request.gamma) throw UsageError("give --sigma or --gamma, not both (gamma = 1/(2 sigma²))");
+  // The paper's method tunes C and σ together; fixed values are used when both are given.
+  // One alone, or either beside a tuning method, would be replaced by tuning: refused, not dropped.
+  const bool width = request.sigma || request.gamma;
+  const char* width_name = request.sigma ? "--sigma" : "--gamma";
+  if (request.tune && (request.C || width)) {
+    throw UsageError(fmt::format("{} with --tune: tuning chooses C and σ; give --tune, or --C with --sigma (or "
+                                 "--gamma) to fix both",
+                                 request.C ? "--C" : width_name));
+  }
+  if (request.C.has_value() != width) {
+    throw UsageError(fmt::format("{} alone would be replaced: C and σ are tuned together; give --C with --sigma "
+                                 "(or --gamma) to fix both",
+                                 request.C ? "--C" : width_name));
+  }
   options.svr.C = request.C.value_or(100.0);
   options.svr.gamma = request.gamma ? *request.gamma : gamma_of_sigma(request.sigma.value_or(1.0));
   options.svr.epsilon = request.epsilon;
@@ -282,9 +296,7 @@ CalibrationOptions calibration_options(const FitRequest& request) {
   options.svr.approximation = request.approximation;
   options.svr.landmarks = request.landmarks;
   options.max_vectors = request.max_vectors;
-  // The paper's method tunes C and σ; fixed values are used only when both are given.
-  const bool fixed = request.C && (request.sigma || request.gamma);
-  if (request.tune || !fixed) {
+  if (!request.C) {
     SvrTuningOptions tuning;
     tuning.method = parse_tune_method(request.tune.value_or("afsa"));
     tuning.objective = parse_tune_objective(request.objective);

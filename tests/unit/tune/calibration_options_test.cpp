@@ -1,5 +1,6 @@
 // The fit policy every front end shares (calibration_options): the SVR is tuned unless C
-// and σ are both given, with the solver's values C = 100, σ = 1 when not given.
+// and σ are both given, with the solver's values C = 100, σ = 1 when not given; a value
+// tuning would replace is refused.
 #include <gtest/gtest.h>
 
 #include "thermodrift/error.hpp"
@@ -23,17 +24,41 @@ TEST(CalibrationOptions, TheSvrIsTunedUnlessCAndSigmaAreBothGiven) {
   EXPECT_EQ(tuned.svr.C, 100.0);
   EXPECT_EQ(tuned.svr.gamma, gamma_of_sigma(1.0));
 
-  request.C = 10;  // one alone: still tuned
-  EXPECT_TRUE(calibration_options(request).tuning.has_value());
+  request.C = 10;
   request.sigma = 2;
   const CalibrationOptions fixed = calibration_options(request);
   EXPECT_FALSE(fixed.tuning.has_value());
   EXPECT_EQ(fixed.svr.C, 10.0);
   EXPECT_EQ(fixed.svr.gamma, gamma_of_sigma(2.0));
 
-  request.tune = "grid";  // asked for: tuned all the same
+  request.C.reset();
+  request.sigma.reset();
+  request.tune = "grid";
   ASSERT_TRUE(calibration_options(request).tuning.has_value());
   EXPECT_EQ(calibration_options(request).tuning->method, TuneMethod::grid);
+}
+
+TEST(CalibrationOptions, AValueTuningWouldReplaceIsAUsageError) {
+  const auto message = [](const FitRequest& request) {
+    try {
+      calibration_options(request);
+    } catch (const UsageError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  FitRequest request;
+  request.model = ModelKind::svr;
+  request.C = 10;  // alone: tuning would choose C
+  EXPECT_NE(message(request).find("--C alone would be replaced"), std::string::npos) << message(request);
+  request.C.reset();
+  request.gamma = 0.5;
+  EXPECT_NE(message(request).find("--gamma alone would be replaced"), std::string::npos) << message(request);
+  request.C = 10;
+  request.tune = "afsa";  // both given, and tuning asked for
+  EXPECT_NE(message(request).find("--C with --tune"), std::string::npos) << message(request);
+  request.tune.reset();
+  EXPECT_EQ(message(request), "no error");
 }
 
 TEST(CalibrationOptions, SigmaAndGammaTogetherOrAnUnknownMethodAreUsageErrors) {
