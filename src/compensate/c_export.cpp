@@ -14,6 +14,7 @@
 #include "thermodrift/io/chamber_log.hpp"
 #include "compensate/c_export_parts.hpp"
 #include "compensate/c_runtime.hpp"
+#include "compensate/c_runtime_text.hpp"
 
 namespace thermodrift {
 
@@ -93,6 +94,28 @@ void append_input_scaling(std::string& out, const DriftModel& model, const std::
   out += "\n";
 }
 
+// The fixed runtime (compensate/c_runtime.c) in the header's names: its prefixes tdrt_
+// and TDRT_ become `p`_ and its upper case, and the file's own opening comment (how it is
+// built) is left out.
+std::string runtime_in(const std::string& p) {
+  std::string_view text = kRuntimeSource;
+  text.remove_prefix(text.find("*/\n") + 3);
+  while (!text.empty() && text.front() == '\n') text.remove_prefix(1);
+  const std::string P = upper(p);
+  std::string out;
+  out.reserve(text.size() + text.size() / 4);
+  for (std::size_t at = 0; at < text.size();) {
+    if (text.compare(at, 5, "tdrt_") == 0 || text.compare(at, 5, "TDRT_") == 0) {
+      out += text[at] == 't' ? p : P;
+      out += '_';
+      at += 5;
+    } else {
+      out += text[at++];
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 bool CExportOptions::IsValid(std::string* error) const {
@@ -162,26 +185,24 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
   out += " */\n";
   out += fmt::format("#ifndef {P}_H_INCLUDED\n#define {P}_H_INCLUDED\n\n#include <math.h>\n\n", fmt::arg("P", P));
   out += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
-  out += render(
-      kDeclarations,
-      {{"P", P},
-       {"p", p},
-       {"axes", axes},
-       {"rate", Literal::time(rate)},
-       {"temperatures", model.temperature_inputs()},
-       {"channel_field", grad_slots > 0
-                             ? fmt::format("  {}_channel_state channel[{}];  /* read by grad terms */\n", p, grad_slots)
-                             : std::string()},
-       {"mean", rings.mean},
-       {"history", rings.history},
-       {"filters", filter_slots(model)},
-       {"single", options.single_precision ? 1 : 0},
-       {"raw", raw ? 1 : 0},
-       {"carry_field",
-        options.single_precision
-            ? fmt::format("  {}_real mean_carry;                /* Kahan compensation of mean_sum */\n", p)
-            : std::string()},
-       {"real", options.single_precision ? "float" : "double"}});
+  // The configuration of the fixed runtime (compensate/c_runtime.c), then the runtime in
+  // the header's names.
+  out += fmt::format("#define {P}_AXES {}\n", axes, fmt::arg("P", P));
+  out += fmt::format("#define {P}_TEMPERATURES {}  /* temperature inputs: one per axis, then the grad terms' extra "
+                     "channels */\n",
+                     model.temperature_inputs(), fmt::arg("P", P));
+  out += fmt::format("#define {P}_MAX_RATE_HZ {}\n", Literal::time(rate), fmt::arg("P", P));
+  out += fmt::format("#define {P}_MEAN_CAPACITY {}\n", rings.mean, fmt::arg("P", P));
+  out += fmt::format("#define {P}_HISTORY_CAPACITY {}\n", rings.history, fmt::arg("P", P));
+  out += fmt::format("#define {P}_FILTERS {}\n", filter_slots(model), fmt::arg("P", P));
+  out += fmt::format("#define {P}_SINGLE_PRECISION {}\n", single ? 1 : 0, fmt::arg("P", P));
+  out += fmt::format("#define {P}_RAW_INPUTS {}  /* 1: step takes gyro and temperature raw, as the log holds them */\n",
+                     raw ? 1 : 0, fmt::arg("P", P));
+  out += fmt::format("#define {P}_GRAD_CHANNELS {}  /* per axis, smoothed for grad terms */\n", grad_slots,
+                     fmt::arg("P", P));
+  out += fmt::format("#define {P}_RESUM_INITIAL {}\n", kTrailingMeanInitialCapacity, fmt::arg("P", P));
+  out += fmt::format("#define {P}_RESUM_JUMP {}\n\n", literal(TrailingMean::kResumJump), fmt::arg("P", P));
+  out += runtime_in(p);
 
   out += fmt::format("static const {p}_pipeline {p}_pipelines[{P}_AXES] = {{\n", fmt::arg("p", p), fmt::arg("P", P));
   for (std::size_t a = 0; a < axes; ++a) {
@@ -194,9 +215,6 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
   out += "};\n\n";
   if (raw) append_input_scaling(out, model, p, P);
 
-  if (single) {
-    out += render(kKahanSum, {{"p", p}});
-  }
 
   // A least-squares model as a C function of the features: `prefix` names its arrays.
   auto emit_linear = [&](const LinearModel& linear, const std::string& name, const std::string& function_name,
@@ -300,39 +318,6 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       emit_linear(std::get<LinearModel>(axis.model), name, name + "_drift", d);
     }
   }
-
-  // The pipeline: FeatureStream::push, SmoothedChannel::push and TrailingMean::push, step for step.
-  out += render(
-      kPipelineFunctions,
-      {{"p", p},
-       {"P", P},
-       {"initial", kTrailingMeanInitialCapacity},
-       {"delta_t", single ? "*delta_t = smoothed;  /* the float rings hold T - reference */"
-                          : "*delta_t = smoothed - pipeline->reference_temperature;"},
-       {"restart_channels",
-        grad_slots > 0
-            ? fmt::format(
-                  "  {{\n    int c;\n    for (c = 0; c < {}; ++c) {}_channel_restart(&axis->channel[c]);\n  }}\n",
-                  grad_slots, p)
-            : std::string()},
-       {"init_channels", grad_slots > 0 ? fmt::format("    {{\n      int c;\n      for (c = 0; c < {}; ++c) "
-                                                      "state->axis[a].channel[c].resum_period = {};\n    }}\n",
-                                                      grad_slots, kTrailingMeanInitialCapacity)
-                                        : std::string()},
-       {"reset_carry", single ? "  channel->mean_carry = 0;\n" : ""},
-       {"reset_carry_inner", single ? "    channel->mean_carry = 0;\n" : ""},
-       {"subtract_oldest", accumulate("channel->mean_sum", "channel->mean_carry", "-leaving")},
-       {"jump", fmt::format("if ({fabs}(leaving) > ({p}_real){limit} * ({fabs}(channel->mean_sum) + "
-                            "({p}_real)channel->mean_count)) jump = 1;",
-                            fmt::arg("fabs", single ? "fabsf" : "fabs"), fmt::arg("p", p),
-                            fmt::arg("limit", literal(TrailingMean::kResumJump)))},
-       {"add_temperature", accumulate("channel->mean_sum", "channel->mean_carry", "temperature")},
-       {"add_entry",
-        accumulate("channel->mean_sum", "channel->mean_carry",
-                   fmt::format("channel->mean_ring[(channel->mean_head + i) % {}_MEAN_CAPACITY].value", P))}});
-
-  // The feature terms' lags: TermEvaluator, operation for operation.
-  out += render(kFilterFunctions, {{"p", p}, {"exp", exp_name}});
 
   if (raw) {
     out += render(kStepRawPrologue, {{"p", p}, {"P", P}, {"unit", to_string(model.gyro_unit)}});

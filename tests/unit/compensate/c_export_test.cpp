@@ -197,6 +197,43 @@ void expect_matches(const DriftModel& model, const ChamberLog& log, bool single_
               difference);
 }
 
+// The fixed runtime every header carries is a C file of its own (src/compensate/c_runtime.c):
+// it compiles without warnings by itself, in both precisions, with and without channels for
+// grad terms, under the flags a navigation computer's build might use; and it refuses to
+// compile without its configuration.
+TEST(CRuntime, CompilesOnItsOwnInEveryConfiguration) {
+  TempDir dir;
+  const std::string runtime = std::string(THERMODRIFT_SOURCE_DIR) + "/src/compensate/c_runtime.c";
+  for (const int single : {0, 1}) {
+    for (const int channels : {0, 2}) {
+      std::FILE* file = std::fopen(dir.file("unit.c").c_str(), "w");
+      ASSERT_NE(file, nullptr);
+      std::fprintf(file,
+                   "#include <math.h>\n"
+                   "#define TDRT_AXES 3\n#define TDRT_TEMPERATURES 4\n#define TDRT_MAX_RATE_HZ 100.0\n"
+                   "#define TDRT_MEAN_CAPACITY 128\n#define TDRT_HISTORY_CAPACITY 128\n#define TDRT_FILTERS 6\n"
+                   "#define TDRT_SINGLE_PRECISION %d\n#define TDRT_RAW_INPUTS 0\n#define TDRT_GRAD_CHANNELS %d\n"
+                   "#define TDRT_RESUM_INITIAL 64\n#define TDRT_RESUM_JUMP %s\n"
+                   "#include \"%s\"\n"
+                   "int main(void) {\n  static tdrt_state state;\n  tdrt_init(&state);\n"
+                   "  return (int)state.rejected_samples;\n}\n",
+                   single, channels, single ? "1e6f" : "1e6", runtime.c_str());
+      std::fclose(file);
+      const auto compiled = testing::run_in(
+          dir, "(gcc -std=c99 -Wall -Wextra -Werror -pedantic -Wshadow -Wconversion -Wno-sign-conversion -O2 unit.c "
+               "-o unit -lm && ./unit)");
+      EXPECT_EQ(compiled.status, 0) << "single " << single << ", channels " << channels << ":\n" << compiled.err;
+    }
+  }
+  std::FILE* bare = std::fopen(dir.file("bare.c").c_str(), "w");
+  ASSERT_NE(bare, nullptr);
+  std::fprintf(bare, "#include \"%s\"\n", runtime.c_str());
+  std::fclose(bare);
+  const auto refused = testing::run_in(dir, "gcc -std=c99 -fsyntax-only bare.c");
+  EXPECT_NE(refused.status, 0);
+  EXPECT_NE(refused.err.find("the configuration macros come first"), std::string::npos) << refused.err;
+}
+
 class CExport : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
