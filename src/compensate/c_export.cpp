@@ -187,21 +187,23 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
   out += "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
   // The configuration of the fixed runtime (compensate/c_runtime.c), then the runtime in
   // the header's names.
-  out += fmt::format("#define {P}_AXES {}\n", axes, fmt::arg("P", P));
-  out += fmt::format("#define {P}_TEMPERATURES {}  /* temperature inputs: one per axis, then the grad terms' extra "
-                     "channels */\n",
-                     model.temperature_inputs(), fmt::arg("P", P));
-  out += fmt::format("#define {P}_MAX_RATE_HZ {}\n", Literal::time(rate), fmt::arg("P", P));
-  out += fmt::format("#define {P}_MEAN_CAPACITY {}\n", rings.mean, fmt::arg("P", P));
-  out += fmt::format("#define {P}_HISTORY_CAPACITY {}\n", rings.history, fmt::arg("P", P));
-  out += fmt::format("#define {P}_FILTERS {}\n", filter_slots(model), fmt::arg("P", P));
-  out += fmt::format("#define {P}_SINGLE_PRECISION {}\n", single ? 1 : 0, fmt::arg("P", P));
-  out += fmt::format("#define {P}_RAW_INPUTS {}  /* 1: step takes gyro and temperature raw, as the log holds them */\n",
-                     raw ? 1 : 0, fmt::arg("P", P));
-  out += fmt::format("#define {P}_GRAD_CHANNELS {}  /* per axis, smoothed for grad terms */\n", grad_slots,
-                     fmt::arg("P", P));
-  out += fmt::format("#define {P}_RESUM_INITIAL {}\n", kTrailingMeanInitialCapacity, fmt::arg("P", P));
-  out += fmt::format("#define {P}_RESUM_JUMP {}\n\n", literal(TrailingMean::kResumJump), fmt::arg("P", P));
+  const auto define = [&](std::string_view name, const auto& value, std::string_view comment = {}) {
+    out += fmt::format("#define {}_{} {}{}\n", P, name, value,
+                       comment.empty() ? std::string() : fmt::format("  /* {} */", comment));
+  };
+  define("AXES", axes);
+  define("TEMPERATURES", model.temperature_inputs(),
+         "temperature inputs: one per axis, then the grad terms' extra channels");
+  define("MAX_RATE_HZ", Literal::time(rate));
+  define("MEAN_CAPACITY", rings.mean);
+  define("HISTORY_CAPACITY", rings.history);
+  define("FILTERS", filter_slots(model));
+  define("SINGLE_PRECISION", single ? 1 : 0);
+  define("RAW_INPUTS", raw ? 1 : 0, "1: step takes gyro and temperature raw, as the log holds them");
+  define("GRAD_CHANNELS", grad_slots, "per axis, smoothed for grad terms");
+  define("RESUM_INITIAL", kTrailingMeanInitialCapacity);
+  define("RESUM_JUMP", literal(TrailingMean::kResumJump));
+  out += "\n";
   out += runtime_in(p);
 
   out += fmt::format("static const {p}_pipeline {p}_pipelines[{P}_AXES] = {{\n", fmt::arg("p", p), fmt::arg("P", P));

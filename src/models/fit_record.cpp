@@ -19,7 +19,7 @@ using nlohmann::json;
 
 // Each record's JSON keys, once: a key and the member it holds. Writing and reading both
 // walk these lists, so a key is spelled in one place. Members not listed (the tuning box,
-// the flags written only when set) are handled beside the list that needs them.
+// the flags written only when set) go through write_extra / Reader::read_extra.
 template <class R, class T>
 struct Field {
   const char* key;
@@ -148,6 +148,13 @@ struct IsVector<std::vector<T>> : std::true_type {};
 template <Record R>
 json write_record(const R& record);
 
+// What a record writes beyond its field list: nothing, or what its overload adds.
+template <class R>
+void write_extra(json&, const R&) {}
+void write_extra(json& out, const TuningRecord& record);
+void write_extra(json& out, const CompressionRecord& record);
+void write_extra(json& out, const FitRecord& record);
+
 template <class T>
 json write_value(const T& value) {
   if constexpr (Record<T>) {
@@ -177,7 +184,26 @@ json write_record(const R& record) {
         (write(field), ...);
       },
       Fields<R>::list);
+  write_extra(out, record);
   return out;
+}
+
+void write_extra(json& out, const TuningRecord& record) {
+  out["objective_unit"] = "(deg/h)^2";
+  out["box"] = {{"C", record.C_box},
+                {"sigma", record.sigma_box},
+                {"epsilon", record.epsilon_box ? json(*record.epsilon_box) : json(record.epsilon)}};
+}
+
+void write_extra(json& out, const CompressionRecord& record) {
+  if (record.training_mse_before || record.training_mse_after) out["training_mse_unit"] = "(deg/h)^2";
+}
+
+// The flags are written only when set, the stepwise path only when there is one.
+void write_extra(json& out, const FitRecord& record) {
+  if (record.averaged_linear_part) out["averaged_linear_part"] = true;
+  if (record.partially_linear) out["partially_linear"] = true;
+  if (!record.stepwise_path.empty()) out["stepwise_path"] = write_value(record.stepwise_path);
 }
 
 // ---- reading ----
@@ -247,12 +273,20 @@ class Reader {
   static R read_record(const Reader& reader) {
     R record;
     std::apply([&](const auto&... field) { (reader.read(field.key, record.*(field.member)), ...); }, Fields<R>::list);
-    if constexpr (std::is_same_v<R, TuningRecord>) read_box(reader, record);
+    read_extra(reader, record);
     return record;
   }
 
  private:
-  static void read_box(const Reader& reader, TuningRecord& tuning) {
+  // What a record reads beyond its field list (write_extra's counterparts).
+  template <class R>
+  static void read_extra(const Reader&, R&) {}
+  static void read_extra(const Reader& reader, FitRecord& record) {
+    reader.read("averaged_linear_part", record.averaged_linear_part);
+    reader.read("partially_linear", record.partially_linear);
+    reader.read("stepwise_path", record.stepwise_path);
+  }
+  static void read_extra(const Reader& reader, TuningRecord& tuning) {
     const json* box = reader.find("box");
     if (box == nullptr) return;
     const Reader fields(*box, reader.name("box"));
@@ -276,39 +310,10 @@ class Reader {
 json to_json(const SvrParameters& params) { return write_record(params); }
 json to_json(const SolverRecord& record) { return write_record(record); }
 json to_json(const SelectionRecord& record) { return write_record(record); }
+json to_json(const TuningRecord& record) { return write_record(record); }
+json to_json(const CompressionRecord& record) { return write_record(record); }
+json fit_record_to_json(const FitRecord& record) { return write_record(record); }
 
-json to_json(const TuningRecord& record) {
-  json out = write_record(record);
-  out["objective_unit"] = "(deg/h)^2";
-  out["box"] = {{"C", record.C_box},
-                {"sigma", record.sigma_box},
-                {"epsilon", record.epsilon_box ? json(*record.epsilon_box) : json(record.epsilon)}};
-  return out;
-}
-
-json to_json(const CompressionRecord& record) {
-  json out = write_record(record);
-  if (record.training_mse_before || record.training_mse_after) out["training_mse_unit"] = "(deg/h)^2";
-  return out;
-}
-
-json fit_record_to_json(const FitRecord& record) {
-  json out = write_record(record);
-  if (record.tuning) out["tuning"] = to_json(*record.tuning);
-  if (record.compressed) out["compressed"] = to_json(*record.compressed);
-  if (record.averaged_linear_part) out["averaged_linear_part"] = true;
-  if (record.partially_linear) out["partially_linear"] = true;
-  if (!record.stepwise_path.empty()) out["stepwise_path"] = write_value(record.stepwise_path);
-  return out;
-}
-
-FitRecord fit_record_from_json(const json& object) {
-  const Reader reader(object, "fit");
-  FitRecord record = Reader::read_record<FitRecord>(reader);
-  reader.read("averaged_linear_part", record.averaged_linear_part);
-  reader.read("partially_linear", record.partially_linear);
-  reader.read("stepwise_path", record.stepwise_path);
-  return record;
-}
+FitRecord fit_record_from_json(const json& object) { return Reader::read_record<FitRecord>(Reader(object, "fit")); }
 
 }  // namespace thermodrift
