@@ -7,7 +7,8 @@
 //     model (lag, hinges, play, memory, Shupe term) and an SVR;
 //   - TrailingMean::push, the 100 s smoothing window at 1 Hz.
 // After Google Benchmark's own table it prints, for each RBF size, the ratio of the
-// scalar loop's time to ours measured in the same run.
+// scalar loop's time to ours measured in the same run: the exact sum fits use and the
+// field's (RbfDecisionFunction::fast, the CPU's widest arithmetic).
 //
 //   build/bin/micro_bench [--benchmark_min_time=0.2] [--benchmark_filter=Rbf]
 #include <benchmark/benchmark.h>
@@ -65,26 +66,28 @@ double scalar_sum(const RbfDecisionFunction& f, const double* x) {
 
 constexpr int kPoints = 64;
 
-void BM_RbfScalar(benchmark::State& state) {
+// One RBF sum per iteration over kPoints points, for a function of state.range(0)
+// vectors and state.range(1) features.
+template <typename Sum>
+void time_rbf(benchmark::State& state, Sum sum) {
   const int vectors = static_cast<int>(state.range(0)), features = static_cast<int>(state.range(1));
   const auto f = random_function(vectors, features);
   const auto points = random_points(kPoints, features);
   std::size_t k = 0;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(scalar_sum(f, &points[(k++ % kPoints) * features]));
+    benchmark::DoNotOptimize(sum(f, &points[(k++ % kPoints) * features]));
   }
   state.SetItemsProcessed(state.iterations());
 }
 
+void BM_RbfScalar(benchmark::State& state) { time_rbf(state, scalar_sum); }
+// The exact sum (fits, evaluate).
 void BM_RbfOurs(benchmark::State& state) {
-  const int vectors = static_cast<int>(state.range(0)), features = static_cast<int>(state.range(1));
-  const auto f = random_function(vectors, features);
-  const auto points = random_points(kPoints, features);
-  std::size_t k = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(f(&points[(k++ % kPoints) * features]));
-  }
-  state.SetItemsProcessed(state.iterations());
+  time_rbf(state, [](const RbfDecisionFunction& f, const double* x) { return f(x); });
+}
+// The field's sum (RbfDecisionFunction::fast: AVX-512 or AVX2 with FMA where the CPU has them).
+void BM_RbfField(benchmark::State& state) {
+  time_rbf(state, [](const RbfDecisionFunction& f, const double* x) { return f.fast(x); });
 }
 
 void rbf_sizes(benchmark::internal::Benchmark* b) {
@@ -94,6 +97,7 @@ void rbf_sizes(benchmark::internal::Benchmark* b) {
 }
 BENCHMARK(BM_RbfScalar)->Apply(rbf_sizes);
 BENCHMARK(BM_RbfOurs)->Apply(rbf_sizes);
+BENCHMARK(BM_RbfField)->Apply(rbf_sizes);
 
 // One simulated 1 Hz cycle and models fitted on it once, for the compensator rows.
 struct Fixture {
@@ -159,7 +163,7 @@ void BM_TrailingMean(benchmark::State& state) {
 }
 BENCHMARK(BM_TrailingMean);
 
-// Google Benchmark's console table, then the scalar/ours ratio of each RBF size.
+// Google Benchmark's console table, then the scalar/ours ratios of each RBF size.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
@@ -173,10 +177,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
       if (name.rfind("BM_RbfOurs/", 0) != 0) continue;
       const std::string size = name.substr(std::string("BM_RbfOurs/").size());
       const auto scalar = times_.find("BM_RbfScalar/" + size);
-      if (scalar == times_.end() || ours <= 0) continue;
-      if (!header) fmt::print("\nRBF decision sum, scalar loop (svm-predict's) / ours, same run:\n"), header = true;
-      fmt::print("  vectors/features {:<10} {:8.1f} ns / {:8.1f} ns = {:.2f}x\n", size, scalar->second, ours,
-                 scalar->second / ours);
+      const auto field = times_.find("BM_RbfField/" + size);
+      if (scalar == times_.end() || field == times_.end() || ours <= 0 || field->second <= 0) continue;
+      if (!header) {
+        fmt::print("\nRBF decision sum, same run: the scalar loop (svm-predict's) over ours, exact (fits) | field\n");
+        header = true;
+      }
+      fmt::print("  vectors/features {:<10} {:8.1f} ns / {:8.1f} ns = {:.2f}x | / {:8.1f} ns = {:.2f}x\n", size,
+                 scalar->second, ours, scalar->second / ours, field->second, scalar->second / field->second);
     }
   }
 

@@ -69,7 +69,7 @@ double SvrModel::predict(std::span<const double> features) const {
     const auto k = static_cast<Eigen::Index>(j);
     x[j] = (features[j] - scaling.feature_mean(k)) / scaling.feature_scale(k);
   }
-  const double kernel_part = function(x) * scaling.target_scale + scaling.target_mean;
+  const double kernel_part = function.fast(x) * scaling.target_scale + scaling.target_mean;
   return linear_part ? kernel_part + linear_part->predict(features) : kernel_part;
 }
 

@@ -64,8 +64,9 @@ const char* to_string(SvrTermination termination) {
   return "unknown";
 }
 
-double RbfDecisionFunction::operator()(const double* x) const {
-  const auto features = static_cast<std::size_t>(support_vectors.cols());
+namespace {
+double rbf_decision(const RbfDecisionFunction& f, const double* x, svr_detail::RbfSumFunction sum) {
+  const auto features = static_cast<std::size_t>(f.support_vectors.cols());
   constexpr std::size_t kFewFeatures = 32;
   const double* columns[kFewFeatures];
   std::vector<const double*> many;
@@ -75,10 +76,17 @@ double RbfDecisionFunction::operator()(const double* x) const {
     column = many.data();
   }
   // Column-major: each feature's values of all vectors are contiguous.
-  for (std::size_t f = 0; f < features; ++f) column[f] = support_vectors.col(static_cast<Eigen::Index>(f)).data();
-  return bias + svr_detail::rbf_sum(column, features, x, gamma, coefficients.data(),
-                                    static_cast<std::size_t>(support_vectors.rows()));
+  for (std::size_t j = 0; j < features; ++j) column[j] = f.support_vectors.col(static_cast<Eigen::Index>(j)).data();
+  return f.bias + sum(column, features, x, f.gamma, f.coefficients.data(),
+                      static_cast<std::size_t>(f.support_vectors.rows()));
 }
+}  // namespace
+
+double RbfDecisionFunction::operator()(const double* x) const { return rbf_decision(*this, x, svr_detail::rbf_sum); }
+
+double RbfDecisionFunction::fast(const double* x) const { return rbf_decision(*this, x, svr_detail::rbf_sum_fast); }
+
+const char* RbfDecisionFunction::fast_arithmetic() { return svr_detail::rbf_sum_fast_arithmetic(); }
 
 Eigen::VectorXd RbfDecisionFunction::predict(const Eigen::MatrixXd& samples) const {
   if (samples.cols() != support_vectors.cols() && support_vectors.rows() > 0) {

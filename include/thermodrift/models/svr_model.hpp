@@ -45,8 +45,10 @@ struct SvrModel {
   std::optional<LinearModel> linear_part;
 
   double sigma() const;  // RBF width in standardized feature units: gamma = 1/(2 sigma²)
+  // One sample, as the field predicts (the Compensator): RbfDecisionFunction::fast.
   double predict(std::span<const double> features) const;
-  Eigen::VectorXd predict(const Eigen::MatrixXd& features) const;  // one row per sample
+  // One row per sample, the same bits on every x86-64 (fit's figures, evaluate, report).
+  Eigen::VectorXd predict(const Eigen::MatrixXd& features) const;
 
   nlohmann::json to_json(const std::vector<std::string>& term_names) const;
   // Throws Error when sizes disagree with `term_names` or a number is not finite.
