@@ -1,10 +1,11 @@
 // ε-SVR: our solver against libsvm's svm-train on the same data in one run.
 //
 //   build/bin/svr_bench [--quick] [--skip-libsvm-corner] [--no-100k] [--threads N]
-//                       [--cache-mb MB] [--tolerance T] [--only N [--C C] [--gamma G]]
-//                       [--no-libsvm] [--verbose]
+//                       [--cache-mb MB] [--tolerance T] [--epsilon E]
+//                       [--only N [--C C] [--gamma G] [--auto]] [--no-libsvm] [--verbose]
 //
-// --only N fits only the ordinary case at n = N (or at --C/--gamma), for profiling;
+// --only N fits only the ordinary case at n = N (or at --C/--gamma; with --auto by the
+// default kernel choice, which takes the low-rank factor where it is complete), for profiling;
 // --verbose adds our summary line (kernel columns, SVs) under each row.
 //
 // Data: standardized chamber-like (ΔT, dT/dt) with a smooth nonlinear drift plus noise,
@@ -229,6 +230,7 @@ int main(int argc, char** argv) {
   bool quick = false, skip_libsvm_corner = false, run_100k = true, run_libsvm = true;
   int only = 0;
   double only_C = 215, only_gamma = 0.046;
+  bool only_auto = false;
   SvrOptions base;
   base.threads = 2;
   base.cache_mb = 200;
@@ -250,6 +252,8 @@ int main(int argc, char** argv) {
     else if (argument == "--threads") base.threads = std::stoi(value());
     else if (argument == "--cache-mb") base.cache_mb = std::stod(value());
     else if (argument == "--tolerance") base.tolerance = std::stod(value());
+    else if (argument == "--epsilon") base.epsilon = std::stod(value());
+    else if (argument == "--auto") only_auto = true;
     else if (argument == "--only") only = std::stoi(value());
     else if (argument == "--no-libsvm") run_libsvm = false;
     else if (argument == "--C") only_C = std::stod(value());
@@ -257,7 +261,8 @@ int main(int argc, char** argv) {
     else if (argument == "--verbose") verbose = true;
     else {
       std::fprintf(stderr, "usage: svr_bench [--quick] [--skip-libsvm-corner] [--no-100k] [--threads N] "
-                           "[--cache-mb MB] [--tolerance T] [--only N [--C C] [--gamma G]] [--no-libsvm] [--verbose]\n");
+                           "[--cache-mb MB] [--tolerance T] [--epsilon E] [--only N [--C C] [--gamma G] [--auto]] "
+                           "[--no-libsvm] [--verbose]\n");
       return 2;
     }
   }
@@ -271,7 +276,8 @@ int main(int argc, char** argv) {
     SvrOptions ordinary = base;
     ordinary.C = only_C;
     ordinary.gamma = only_gamma;
-    compare("only", chamber_like(only, only == 2271 ? 3 : 1), ordinary, run_libsvm);
+    if (only_auto) ordinary.approximation = SvrApproximation::automatic;
+    compare(only_auto ? "only, auto" : "only", chamber_like(only, only == 2271 ? 3 : 1), ordinary, run_libsvm);
     return 0;
   }
   std::vector<int> sizes{2000, 5000, 20000};
