@@ -40,7 +40,7 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
   double longest = 0;
   bool turn_on = false;  // an on:TAU term: the log's start is taken as power-on
   for (const auto& axis : model.axes) {
-    longest = std::max(longest, axis.pipeline.longest_time_constant());
+    longest = std::max(longest, axis.pipeline.longest_delay());
     const auto& terms = axis.pipeline.terms;
     turn_on = turn_on || std::any_of(terms.begin(), terms.end(), [](const FeatureTerm& term) {
                 return term.has(FeatureAtom::Kind::turn_on);
@@ -51,6 +51,11 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
                      "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics",
                      longest, turn_on ? ", and its on:TAU terms take that start as power-on" : "", 3 * longest,
                      3 * longest));
+  } else if (settle < 3 * longest) {
+    warn(fmt::format("--settle {:g} is less than three times the model's slowest lag ({:g} s): if a log starts "
+                     "mid-transient, its start still weighs on the metrics (by e^-{:.1f} of the lag's error there); "
+                     "--settle {:g} leaves it out",
+                     settle, longest, settle / longest, 3 * longest));
   }
   nlohmann::json result = evaluation_header(model_file, settle);
   nlohmann::json axes = nlohmann::json::array();

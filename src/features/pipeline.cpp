@@ -31,10 +31,10 @@ std::vector<std::size_t> Pipeline::channels() const {
   return out;
 }
 
-double Pipeline::longest_time_constant() const {
+double Pipeline::longest_delay() const {
   double longest = 0;
   for (const auto& term : terms) {
-    for (const double tau : term.time_constants()) longest = std::max(longest, tau);
+    for (const auto& factor : term.factors) longest = std::max(longest, factor.atom.tau + factor.atom.tau2);
   }
   return longest;
 }

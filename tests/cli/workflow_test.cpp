@@ -431,6 +431,11 @@ TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
   for (std::size_t a = 0; a < 3; ++a) {
     EXPECT_EQ(settled_json["axes"][a]["samples"].get<std::size_t>() + 1600, all_axes[a]["samples"].get<std::size_t>());
   }
+  // A settle shorter than three times the lag: said too, with the settle that covers it.
+  const auto short_settle = thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --settle 600 --json");
+  ASSERT_EQ(short_settle.status, 0) << short_settle.err;
+  EXPECT_TRUE(contains(short_settle.err, "slowest lag (600 s)")) << short_settle.err;
+  EXPECT_TRUE(contains(short_settle.err, "--settle 1800 leaves it out")) << short_settle.err;
   const auto compensated = thermodrift(dir_, "compensate --model grad.json --data cycle2.csv --out out.csv");
   ASSERT_EQ(compensated.status, 0) << compensated.err;
   EXPECT_EQ(split_lines(read_file(dir_.file("out.csv"))).size(), split_lines(read_file(cycle2_)).size());

@@ -47,8 +47,10 @@ struct Pipeline {
   std::vector<std::size_t> channels() const;
   // The channel ΔT is computed from, for an axis whose own channel is `own`.
   std::size_t temperature_input(std::size_t own) const { return temperature_channel.value_or(own); }
-  // The longest time constant of its terms, s (0 for the paper's pair).
-  double longest_time_constant() const;
+  // How long its slowest state remembers where it started, s: over its terms' atoms, the
+  // largest time constant plus the one in series behind it (a chain's mean delay); 0
+  // for the paper's pair.
+  double longest_delay() const;
   void validate() const;  // UsageError on nonsense (negative window, no terms, ...)
 
   nlohmann::json to_json() const;
