@@ -146,7 +146,7 @@ class Search {
   double cv(const Terms& terms) {
     options_.stop.throw_if_requested("feature search");
     ++result_.candidates_scored;
-    return least_squares_cv(cache_.matrix(terms), cache_.target(), result_.held_out.blocks);
+    return cache_.cv_score(terms, result_.held_out.blocks, 0).cv_mse;
   }
   double penalized(const Scored& s) const { return s.cv / std::pow(keep_, static_cast<double>(s.terms.size())); }
 

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <limits>
 
 #include <fmt/format.h>
@@ -54,12 +55,17 @@ void ColumnCache::ensure(const std::vector<std::string>& names) {
     std::nth_element(uses.begin(), middle, uses.end());
     const std::uint64_t oldest_kept = *middle;
     std::erase_if(columns_, [&](const auto& entry) { return entry.second.last_use < oldest_kept; });
+    // Their inner products go too (ids are never reused, so none can be found again).
+    products_.clear();
+    with_target_.clear();
+    pool_.clear();
   }
   std::vector<Eigen::MatrixXd> parts;
   for (const auto& log : inputs_) parts.push_back(evaluate_terms(missing, log));
   for (std::size_t j = 0; j < missing.size(); ++j) {
     Column& entry = columns_[missing[j].name()];
     entry.last_use = clock_;
+    entry.id = next_id_++;
     Eigen::VectorXd& column = entry.values;
     column.resize(target_.size());
     Eigen::Index row = 0;
@@ -67,43 +73,54 @@ void ColumnCache::ensure(const std::vector<std::string>& names) {
       column.segment(row, part.rows()) = part.col(static_cast<Eigen::Index>(j));
       row += part.rows();
     }
+    const double largest = column.size() > 0 ? column.cwiseAbs().maxCoeff() : 0.0;
+    entry.scale = largest > 0 ? largest : 1.0;
   }
 }
 
 namespace {
 
+// The least-squares coefficients from normal equations, with a ridge of 1e-9 of the
+// diagonal (below).
+Eigen::VectorXd solve_normal(Eigen::MatrixXd normal, const Eigen::VectorXd& rhs) {
+  normal.diagonal() += 1e-9 * normal.diagonal().cwiseAbs() + Eigen::VectorXd::Constant(normal.rows(), 1e-300);
+  return normal.ldlt().solve(rhs);
+}
+
 // The normal equations of least squares with an intercept on [1, x], the columns of x
-// scaled to a largest magnitude of 1 so that powers of large values keep them well scaled.
+// scaled to a largest magnitude of 1 so that powers of large values keep them well
+// scaled, per segment of the held-out blocks.
 struct NormalEquations {
   Eigen::MatrixXd design;  // n x (1 + columns)
-  Eigen::MatrixXd gram;
-  Eigen::VectorXd moment;
+  Segments segments;
+  SegmentedNormalEquations equations;
 
-  NormalEquations(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) : design(y.size(), x.cols() + 1) {
+  NormalEquations(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks)
+      : design(y.size(), x.cols() + 1), segments(segments_of(blocks, y.size())) {
     design.col(0).setOnes();
     for (Eigen::Index j = 0; j < x.cols(); ++j) {
       const double scale = x.col(j).cwiseAbs().maxCoeff();
       design.col(j + 1) = scale > 0 ? Eigen::VectorXd(x.col(j) / scale) : Eigen::VectorXd(x.col(j));
     }
-    gram = Eigen::MatrixXd::Zero(design.cols(), design.cols());
-    gram.selfadjointView<Eigen::Lower>().rankUpdate(design.transpose());
-    gram = gram.selfadjointView<Eigen::Lower>();
-    moment = design.transpose() * y;
-  }
-
-  static Eigen::VectorXd solve(Eigen::MatrixXd normal, const Eigen::VectorXd& rhs) {
-    normal.diagonal() += 1e-9 * normal.diagonal().cwiseAbs() + Eigen::VectorXd::Constant(normal.rows(), 1e-300);
-    return normal.ldlt().solve(rhs);
+    const Eigen::Index q = design.cols();
+    equations.gram.assign(segments.count, Eigen::MatrixXd::Zero(q, q));
+    equations.moment.assign(segments.count, Eigen::VectorXd::Zero(q));
+    for (const Segments::Range& range : segments.ranges) {
+      const auto rows = design.middleRows(range.begin, range.end - range.begin);
+      Eigen::MatrixXd& gram = equations.gram[range.segment];
+      gram.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+      equations.moment[range.segment] += rows.transpose() * y.segment(range.begin, range.end - range.begin);
+    }
+    for (auto& gram : equations.gram) gram = Eigen::MatrixXd(gram.selfadjointView<Eigen::Lower>());
   }
 
   // Each block's rows predicted by the fit on the rest (NaN on rows no block holds out).
-  Eigen::VectorXd held_out_predictions(const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) const {
-    Eigen::VectorXd predicted = Eigen::VectorXd::Constant(y.size(), std::numeric_limits<double>::quiet_NaN());
-    for (const SampleRange& block : blocks) {
-      const auto rows = design.middleRows(block.begin, block.size());
-      const Eigen::VectorXd beta =
-          solve(gram - rows.transpose() * rows, moment - rows.transpose() * y.segment(block.begin, block.size()));
-      predicted.segment(block.begin, block.size()) = rows * beta;
+  Eigen::VectorXd held_out_predictions() const {
+    Eigen::VectorXd predicted = Eigen::VectorXd::Constant(design.rows(), std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t b = 0; b < segments.blocks.size(); ++b) {
+      const SampleRange& block = segments.blocks[b];
+      predicted.segment(block.begin, block.size()) =
+          design.middleRows(block.begin, block.size()) * equations.fold_coefficients(b);
     }
     return predicted;
   }
@@ -111,22 +128,159 @@ struct NormalEquations {
 
 }  // namespace
 
-// One Gram matrix serves every fold (the fold's own rows subtracted), so a set costs two
-// passes over the samples, not one QR per fold: the searches score thousands of sets. A
-// ridge of 1e-9 of the diagonal settles nearly collinear columns (a hinge whose knot no
+Segments segments_of(const std::vector<SampleRange>& blocks, Eigen::Index rows) {
+  Segments segments;
+  segments.blocks = blocks;
+  segments.count = blocks.size() + 1;
+  std::vector<std::size_t> order(blocks.size());
+  for (std::size_t b = 0; b < order.size(); ++b) order[b] = b;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return blocks[a].begin < blocks[b].begin; });
+  Eigen::Index at = 0;
+  for (const std::size_t b : order) {
+    const SampleRange& block = blocks[b];
+    if (block.begin < at || block.end > rows || block.end < block.begin) {
+      throw Error("cross-validation blocks overlap or leave the samples");
+    }
+    if (block.begin > at) segments.ranges.push_back({blocks.size(), at, block.begin});
+    if (block.end > block.begin) segments.ranges.push_back({b, block.begin, block.end});
+    at = block.end;
+  }
+  if (at < rows) segments.ranges.push_back({blocks.size(), at, rows});
+  return segments;
+}
+
+// A ridge of 1e-9 of the diagonal settles nearly collinear columns (a hinge whose knot no
 // sample passes is the node's level minus a constant); it moves the fits of
 // well-determined columns by far less than the noise does.
+Eigen::VectorXd SegmentedNormalEquations::coefficients() const { return fold_coefficients(gram.size()); }
+
+Eigen::VectorXd SegmentedNormalEquations::fold_coefficients(std::size_t block) const {
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(gram.front().rows(), gram.front().cols());
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(moment.front().size());
+  for (std::size_t s = 0; s < gram.size(); ++s) {
+    if (s == block) continue;
+    normal += gram[s];
+    rhs += moment[s];
+  }
+  return solve_normal(std::move(normal), rhs);
+}
+
+// The normal equations per segment serve every fold, so a set costs two passes over the
+// samples, not one QR per fold: the searches score thousands of sets.
 Eigen::VectorXd least_squares_cv_predictions(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
                                              const std::vector<SampleRange>& blocks) {
-  return NormalEquations(x, y).held_out_predictions(y, blocks);
+  return NormalEquations(x, y, blocks).held_out_predictions();
 }
 
 LeastSquaresScore least_squares_cv_score(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
                                          const std::vector<SampleRange>& blocks, Eigen::Index grouped) {
-  const NormalEquations equations(x, y);
-  const Eigen::VectorXd beta = NormalEquations::solve(equations.gram, equations.moment);
-  return {held_out_mse(equations.held_out_predictions(y, blocks), y, blocks),
+  const NormalEquations equations(x, y, blocks);
+  const Eigen::VectorXd beta = equations.equations.coefficients();
+  return {held_out_mse(equations.held_out_predictions(), y, blocks),
           cancellation(equations.design.rightCols(x.cols()), beta.tail(x.cols()), grouped)};
+}
+
+void ColumnCache::set_blocks(const std::vector<SampleRange>& blocks) {
+  segments_ = segments_of(blocks, target_.size());
+  ones_ = Eigen::VectorXd::Ones(target_.size());
+  products_.clear();
+  with_target_.clear();
+  pool_.clear();
+}
+
+std::size_t ColumnCache::segment_products(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const std::size_t offset = pool_.size();
+  pool_.resize(offset + segments_.count, 0.0);
+  for (const Segments::Range& range : segments_.ranges) {
+    const Eigen::Index length = range.end - range.begin;
+    pool_[offset + range.segment] += a.segment(range.begin, length).dot(b.segment(range.begin, length));
+  }
+  return offset;
+}
+
+LeastSquaresScore ColumnCache::cv_score(const std::vector<std::string>& names, const std::vector<SampleRange>& blocks,
+                                        Eigen::Index grouped) {
+  const auto same = [](const SampleRange& a, const SampleRange& b) { return a.begin == b.begin && a.end == b.end; };
+  if (segments_.count == 0 ||
+      !std::equal(blocks.begin(), blocks.end(), segments_.blocks.begin(), segments_.blocks.end(), same)) {
+    set_blocks(blocks);
+  }
+  ensure(names);
+  // Past the budget the products go; the names' columns stay (ensure just kept them).
+  constexpr std::size_t kPoolBudget = std::size_t{64} << 20;
+  if (pool_.size() * sizeof(double) > kPoolBudget) {
+    products_.clear();
+    with_target_.clear();
+    pool_.clear();
+  }
+  const auto q = static_cast<Eigen::Index>(names.size() + 1);
+  std::vector<const Eigen::VectorXd*> values(names.size() + 1, &ones_);
+  std::vector<std::uint64_t> ids(names.size() + 1, 0);
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(q);
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    const Column& column = columns_.at(names[j]);
+    values[j + 1] = &column.values;
+    ids[j + 1] = column.id;
+    scale(static_cast<Eigen::Index>(j + 1)) = 1.0 / column.scale;
+  }
+  // Per segment, the Gram matrix and moment of [1, x] with x's columns scaled to a largest
+  // magnitude of 1 (as NormalEquations scales them).
+  const std::size_t count = segments_.count;
+  SegmentedNormalEquations equations;
+  equations.gram.assign(count, Eigen::MatrixXd(q, q));
+  equations.moment.assign(count, Eigen::VectorXd(q));
+  for (Eigen::Index a = 0; a < q; ++a) {
+    const auto ua = static_cast<std::size_t>(a);
+    for (Eigen::Index b = a; b < q; ++b) {
+      const auto ub = static_cast<std::size_t>(b);
+      const std::uint64_t low = std::min(ids[ua], ids[ub]), high = std::max(ids[ua], ids[ub]);
+      const std::uint64_t key = (low << 32) | high;
+      auto found = products_.find(key);
+      if (found == products_.end()) found = products_.emplace(key, segment_products(*values[ua], *values[ub])).first;
+      for (std::size_t s = 0; s < count; ++s) {
+        equations.gram[s](a, b) = equations.gram[s](b, a) = pool_[found->second + s] * scale(a) * scale(b);
+      }
+    }
+    auto found = with_target_.find(ids[ua]);
+    if (found == with_target_.end()) found = with_target_.emplace(ids[ua], segment_products(*values[ua], target_)).first;
+    for (std::size_t s = 0; s < count; ++s) equations.moment[s](a) = pool_[found->second + s] * scale(a);
+  }
+  // Each block predicted by the fit on the rest; its residuals from the columns (not from
+  // the inner products, which would lose digits where a fit's terms cancel).
+  double squared_error = 0, held_out = 0;
+  Eigen::VectorXd residual;
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const Eigen::VectorXd beta = equations.fold_coefficients(b);
+    const SampleRange& block = blocks[b];
+    residual = target_.segment(block.begin, block.size());
+    for (Eigen::Index j = 0; j < q; ++j) {
+      residual -= (beta(j) * scale(j)) * values[static_cast<std::size_t>(j)]->segment(block.begin, block.size());
+    }
+    squared_error += residual.squaredNorm();
+    held_out += static_cast<double>(block.size());
+  }
+  LeastSquaresScore score;
+  score.cv_mse = held_out > 0 ? squared_error / held_out : 0.0;
+  // The cancellation of the fit on all rows (models/linear.hpp's, from the same sums):
+  // the spread of v = Σ_J x_j β_j is √(Σv²/n − (Σv/n)²), Σv = Σ_J β_j Σx_j.
+  const Eigen::VectorXd beta = equations.coefficients();
+  Eigen::MatrixXd total_gram = Eigen::MatrixXd::Zero(q, q);
+  for (const auto& gram : equations.gram) total_gram += gram;
+  const double n = total_gram(0, 0);
+  if (n < 2) return score;
+  const auto spread = [&](Eigen::Index first, Eigen::Index count) {
+    const auto b = beta.segment(first, count);
+    const double sum = total_gram.row(0).segment(first, count).dot(b);
+    const double squares = b.dot(total_gram.block(first, first, count, count) * b);
+    return std::sqrt(std::max(0.0, squares / n - (sum / n) * (sum / n)));
+  };
+  const Eigen::Index p = q - 1;
+  const double whole = spread(1, p);
+  if (!(whole > 0)) return score;
+  double parts = grouped > 0 ? spread(1, grouped) : 0.0;
+  for (Eigen::Index j = grouped; j < p; ++j) parts += spread(1 + j, 1);
+  score.cancellation = parts / whole;
+  return score;
 }
 
 double held_out_mse(const Eigen::VectorXd& predicted, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) {

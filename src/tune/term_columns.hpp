@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -16,6 +17,40 @@
 #include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
+
+// The blocked CV MSE of a least-squares fit and the cancellation of the fit on all rows
+// (models/linear.hpp), as least_squares_cv_score and ColumnCache::cv_score give them.
+struct LeastSquaresScore {
+  double cv_mse = 0;
+  double cancellation = 1;
+};
+
+// The samples cut by held-out blocks into segments: each block (segment = its index),
+// then the rows no block holds (segment = blocks.size()); `ranges` lists them in row order.
+struct Segments {
+  std::vector<SampleRange> blocks;
+  struct Range {
+    std::size_t segment;
+    Eigen::Index begin, end;
+  };
+  std::vector<Range> ranges;
+  std::size_t count = 0;  // blocks.size() + 1
+};
+// Error when blocks overlap or leave [0, rows).
+Segments segments_of(const std::vector<SampleRange>& blocks, Eigen::Index rows);
+
+// The normal equations of least squares with an intercept, kept per segment, so that a
+// fold's (every segment but its block's) is a sum, never the whole minus the block: a
+// column that is zero outside one block (a hinge only the hottest block reaches) is then
+// exactly zero in that fold's equations, and the ridge of 1e-9 of the diagonal sets its
+// coefficient to 0. As a difference, rounding left ±1e-17 there, and the coefficient was
+// a ratio of two rounding errors: held-out MSEs of 10^25 for such sets.
+struct SegmentedNormalEquations {
+  std::vector<Eigen::MatrixXd> gram;    // per segment, (1 + columns)²
+  std::vector<Eigen::VectorXd> moment;  // per segment, Σ [1, x]·y
+  Eigen::VectorXd coefficients() const;                        // on every segment
+  Eigen::VectorXd fold_coefficients(std::size_t block) const;  // on every segment but `block`
+};
 
 // The ready, decimated samples of every term asked for so far, one column per term name:
 // each new batch of terms is one pass of the terms over the logs' recorded inputs. The time-constant search
@@ -39,6 +74,13 @@ class ColumnCache {
     return x;
   }
 
+  // least_squares_cv_score of the named columns over `blocks` (the same blocks on every
+  // call), from their inner products per block: each pair of columns is multiplied once
+  // and kept, so a set that adds one term to a scored set costs one pass per new pair,
+  // not a Gram matrix over all samples.
+  LeastSquaresScore cv_score(const std::vector<std::string>& names, const std::vector<SampleRange>& blocks,
+                                    Eigen::Index grouped);
+
  private:
   static constexpr std::size_t kBudgetBytes = std::size_t{128} << 20;
   // The terms' inputs over each log, smoothed once (every temperature channel recorded).
@@ -48,9 +90,23 @@ class ColumnCache {
   struct Column {
     Eigen::VectorXd values;
     std::uint64_t last_use = 0;  // the clock_ of the last ensure that asked for it
+    std::uint64_t id = 0;        // never reused: the key of its inner products
+    double scale = 1;            // its largest magnitude (1 when all zero)
   };
   std::map<std::string, Column> columns_;
   std::uint64_t clock_ = 0;
+  std::uint64_t next_id_ = 1;  // 0: the constant column (the intercept)
+
+  // cv_score's inner products, per segment of the blocks it was last asked for.
+  Segments segments_;
+  Eigen::VectorXd ones_;  // the intercept's column, id 0
+  // Per segment, at an offset into pool_: Σ a·b for the columns of ids a ≤ b (key
+  // a·2^32 + b), and Σ a·y (key a). Dropped whole past a byte budget.
+  std::unordered_map<std::uint64_t, std::size_t> products_, with_target_;
+  std::vector<double> pool_;
+  void set_blocks(const std::vector<SampleRange>& blocks);
+  // Σ a·b over each segment, into pool_; returns its offset.
+  std::size_t segment_products(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 };
 
 // Pooled MSE of least squares (with an intercept) over held-out `blocks` (contiguous
@@ -58,10 +114,6 @@ class ColumnCache {
 double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks);
 // The blocked CV MSE of least squares on x and the cancellation of the fit on all rows
 // (models/linear.hpp: the first `grouped` columns one part), from one Gram matrix.
-struct LeastSquaresScore {
-  double cv_mse = 0;
-  double cancellation = 1;
-};
 LeastSquaresScore least_squares_cv_score(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
                                          const std::vector<SampleRange>& blocks, Eigen::Index grouped);
 // The held-out predictions behind it: each block's rows by the fit on the rest (NaN on

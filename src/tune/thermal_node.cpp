@@ -236,8 +236,8 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     options.stop.throw_if_requested("feature identification");
     ++result.candidates_scored;
     // The node's level and its hinges are one part: a piecewise-linear map cancels by design.
-    const auto [cv, cancelled] = least_squares_cv_score(cache->matrix(model.terms()), y, result.held_out.blocks,
-                                                        static_cast<Eigen::Index>(1 + model.knots.size()));
+    const auto [cv, cancelled] = cache->cv_score(model.terms(), result.held_out.blocks,
+                                                 static_cast<Eigen::Index>(1 + model.knots.size()));
     const double excess = cancelled / options.max_cancellation;
     return excess > 1 ? cv * excess * excess : cv;
   };
