@@ -155,14 +155,23 @@ Segments segments_of(const std::vector<SampleRange>& blocks, Eigen::Index rows) 
 Eigen::VectorXd SegmentedNormalEquations::coefficients() const { return fold_coefficients(gram.size()); }
 
 Eigen::VectorXd SegmentedNormalEquations::fold_coefficients(std::size_t block) const {
-  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(gram.front().rows(), gram.front().cols());
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(moment.front().size());
+  return solve_normal(gram_without(block), moment_without(block));
+}
+
+Eigen::MatrixXd SegmentedNormalEquations::gram_without(std::size_t block) const {
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(gram.front().rows(), gram.front().cols());
   for (std::size_t s = 0; s < gram.size(); ++s) {
-    if (s == block) continue;
-    normal += gram[s];
-    rhs += moment[s];
+    if (s != block) sum += gram[s];
   }
-  return solve_normal(std::move(normal), rhs);
+  return sum;
+}
+
+Eigen::VectorXd SegmentedNormalEquations::moment_without(std::size_t block) const {
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(moment.front().size());
+  for (std::size_t s = 0; s < moment.size(); ++s) {
+    if (s != block) sum += moment[s];
+  }
+  return sum;
 }
 
 // The normal equations per segment serve every fold, so a set costs two passes over the
@@ -263,9 +272,8 @@ LeastSquaresScore ColumnCache::cv_score(const std::vector<std::string>& names, c
   score.cv_mse = held_out > 0 ? squared_error / held_out : 0.0;
   // The cancellation of the fit on all rows (models/linear.hpp's, from the same sums):
   // the spread of v = Σ_J x_j β_j is √(Σv²/n − (Σv/n)²), Σv = Σ_J β_j Σx_j.
-  const Eigen::VectorXd beta = equations.coefficients();
-  Eigen::MatrixXd total_gram = Eigen::MatrixXd::Zero(q, q);
-  for (const auto& gram : equations.gram) total_gram += gram;
+  const Eigen::MatrixXd total_gram = equations.gram_without(count);
+  const Eigen::VectorXd beta = solve_normal(total_gram, equations.moment_without(count));
   const double n = total_gram(0, 0);
   if (n < 2) return score;
   const auto spread = [&](Eigen::Index first, Eigen::Index count) {

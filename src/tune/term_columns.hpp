@@ -50,6 +50,9 @@ struct SegmentedNormalEquations {
   std::vector<Eigen::VectorXd> moment;  // per segment, Σ [1, x]·y
   Eigen::VectorXd coefficients() const;                        // on every segment
   Eigen::VectorXd fold_coefficients(std::size_t block) const;  // on every segment but `block`
+  // The sums over every segment but `block` (a block past the last: every segment).
+  Eigen::MatrixXd gram_without(std::size_t block) const;
+  Eigen::VectorXd moment_without(std::size_t block) const;
 };
 
 // The ready, decimated samples of every term asked for so far, one column per term name:
