@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <string_view>
 
 #include "commands.hpp"
 #include "evaluate_command.hpp"
@@ -46,16 +47,22 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
                 return term.has(FeatureAtom::Kind::turn_on);
               });
   }
+  // A log cut from a longer recording starts the lags where the unit was not; judged within
+  // the recording, they run through what came before (docs/generalization.md: on development
+  // laws 1-40's next cycle, 90th percentiles 38 / 12 / 15x the floor settled, 10 / 11 / 10x so).
+  constexpr std::string_view whole =
+      "; a log cut from a longer recording is better judged within it: the whole recording with --settle up to "
+      "the part to judge";
   if (settle == 0 && longest > 0) {
     warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log{}; if it starts "
-                     "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics",
+                     "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics{}",
                      longest, turn_on ? ", and its on:TAU terms take that start as power-on" : "", 3 * longest,
-                     3 * longest));
+                     3 * longest, whole));
   } else if (settle < 3 * longest) {
     warn(fmt::format("--settle {:g} is less than three times the model's slowest lag ({:g} s): if a log starts "
                      "mid-transient, its start still weighs on the metrics (by e^-{:.1f} of the lag's error there); "
-                     "--settle {:g} leaves it out",
-                     settle, longest, settle / longest, 3 * longest));
+                     "--settle {:g} leaves it out{}",
+                     settle, longest, settle / longest, 3 * longest, whole));
   }
   nlohmann::json result = evaluation_header(model_file, settle);
   nlohmann::json axes = nlohmann::json::array();

@@ -436,6 +436,8 @@ TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
   ASSERT_EQ(short_settle.status, 0) << short_settle.err;
   EXPECT_TRUE(contains(short_settle.err, "slowest lag (600 s)")) << short_settle.err;
   EXPECT_TRUE(contains(short_settle.err, "--settle 1800 leaves it out")) << short_settle.err;
+  EXPECT_TRUE(contains(short_settle.err, "the whole recording with --settle up to the part to judge"))
+      << short_settle.err;
   const auto compensated = thermodrift(dir_, "compensate --model grad.json --data cycle2.csv --out out.csv");
   ASSERT_EQ(compensated.status, 0) << compensated.err;
   EXPECT_EQ(split_lines(read_file(dir_.file("out.csv"))).size(), split_lines(read_file(cycle2_)).size());
