@@ -48,8 +48,9 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
               });
   }
   // A log cut from a longer recording starts the lags where the unit was not; judged within
-  // the recording, they run through what came before (docs/generalization.md: on development
-  // laws 1-40's next cycle, 90th percentiles 38 / 12 / 15x the floor settled, 10 / 11 / 10x so).
+  // the recording, they run through what came before. On development laws 1-40's next cycle
+  // (docs/generalization.md) the 90th percentiles per axis were 38 / 12 / 15 times the floor
+  // with the lags started in equilibrium and 10 / 11 / 10 with them carried over.
   constexpr std::string_view whole =
       "; a log cut from a longer recording is better judged within it: the whole recording with --settle up to "
       "the part to judge";
