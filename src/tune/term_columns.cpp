@@ -56,9 +56,7 @@ void ColumnCache::ensure(const std::vector<std::string>& names) {
     const std::uint64_t oldest_kept = *middle;
     std::erase_if(columns_, [&](const auto& entry) { return entry.second.last_use < oldest_kept; });
     // Their inner products go too (ids are never reused, so none can be found again).
-    products_.clear();
-    with_target_.clear();
-    pool_.clear();
+    drop_products();
   }
   std::vector<Eigen::MatrixXd> parts;
   for (const auto& log : inputs_) parts.push_back(evaluate_terms(missing, log));
@@ -192,6 +190,10 @@ LeastSquaresScore least_squares_cv_score(const Eigen::MatrixXd& x, const Eigen::
 void ColumnCache::set_blocks(const std::vector<SampleRange>& blocks) {
   segments_ = segments_of(blocks, target_.size());
   ones_ = Eigen::VectorXd::Ones(target_.size());
+  drop_products();
+}
+
+void ColumnCache::drop_products() {
   products_.clear();
   with_target_.clear();
   pool_.clear();
@@ -217,11 +219,7 @@ LeastSquaresScore ColumnCache::cv_score(const std::vector<std::string>& names, c
   ensure(names);
   // Past the budget the products go; the names' columns stay (ensure just kept them).
   constexpr std::size_t kPoolBudget = std::size_t{64} << 20;
-  if (pool_.size() * sizeof(double) > kPoolBudget) {
-    products_.clear();
-    with_target_.clear();
-    pool_.clear();
-  }
+  if (pool_.size() * sizeof(double) > kPoolBudget) drop_products();
   const auto q = static_cast<Eigen::Index>(names.size() + 1);
   std::vector<const Eigen::VectorXd*> values(names.size() + 1, &ones_);
   std::vector<std::uint64_t> ids(names.size() + 1, 0);

@@ -108,6 +108,7 @@ class ColumnCache {
   std::unordered_map<std::uint64_t, std::size_t> products_, with_target_;
   std::vector<double> pool_;
   void set_blocks(const std::vector<SampleRange>& blocks);
+  void drop_products();  // every kept inner product (pool_ and its keys)
   // Σ a·b over each segment, into pool_; returns its offset.
   std::size_t segment_products(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 };

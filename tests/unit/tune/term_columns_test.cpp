@@ -65,12 +65,6 @@ TEST(ColumnCache, CvScoreFromKeptProductsMatchesTheGramOverAllRows) {
   }
 }
 
-}  // namespace
-}  // namespace thermodrift
-
-namespace thermodrift {
-namespace {
-
 // A column that is zero outside one block (a hinge only the hottest block reaches): the
 // fold that holds that block out knows nothing of it, and predicts the block exactly as
 // the set without it does. (Before the normal equations were kept per block, a fold's
@@ -84,10 +78,9 @@ TEST(LeastSquaresCv, AColumnZeroOutsideTheHeldOutBlockDoesNotEnterItsFold) {
   const auto blocks = cache.blocks(10, FoldsBy::time).blocks;
   const Eigen::MatrixXd node = cache.matrix({"lag:600"});
   // The block that reaches highest, and a knot just above every other block's top.
-  std::size_t hottest = 0;
   std::vector<double> top;
   for (const auto& block : blocks) top.push_back(node.col(0).segment(block.begin, block.size()).maxCoeff());
-  hottest = static_cast<std::size_t>(std::max_element(top.begin(), top.end()) - top.begin());
+  const auto hottest = static_cast<std::size_t>(std::max_element(top.begin(), top.end()) - top.begin());
   double knot = -1e300;
   for (std::size_t b = 0; b < blocks.size(); ++b) {
     if (b != hottest) knot = std::max(knot, top[b]);
