@@ -265,27 +265,37 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       if (svr->linear_part) emit_linear(*svr->linear_part, name + "_linear", name + "_linear_part", d);
       const auto& function = svr->function;
       const auto sv = static_cast<std::size_t>(function.support_vectors.rows());
+      if (sv == 0) {
+        // The kernel left out at fit time (fit.kernel_check): the linear part and a constant.
+        out += fmt::format("static inline {p}_real {name}_drift(const {p}_real features[{d}]) {{\n"
+                           "{use}  return {bias} * {scale} + {mean}{linear};\n}}\n\n",
+                           fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d),
+                           fmt::arg("use", svr->linear_part ? "" : "  (void)features;\n"),
+                           fmt::arg("bias", literal(function.bias)), fmt::arg("scale", literal(svr->scaling.target_scale)),
+                           fmt::arg("mean", literal(svr->scaling.target_mean)),
+                           fmt::arg("linear", svr->linear_part ? fmt::format(" + {}_linear_part(features)", name)
+                                                               : std::string()));
+        continue;
+      }
       out += fmt::format("static const {}_real {}_feature_mean[{}] = {{", p, name, d);
       append_array(out, literal, svr->scaling.feature_mean.data(), d);
       out += "};\n";
       out += fmt::format("static const {}_real {}_feature_scale[{}] = {{", p, name, d);
       append_array(out, literal, svr->scaling.feature_scale.data(), d);
       out += "};\n";
-      if (sv > 0) {
-        out += fmt::format("static const {}_real {}_support_vectors[{}][{}] = {{", p, name, sv, d);
-        for (std::size_t k = 0; k < sv; ++k) {
-          out += "\n    {";
-          for (std::size_t j = 0; j < d; ++j) {
-            out += literal(function.support_vectors(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j)));
-            if (j + 1 < d) out += ", ";
-          }
-          out += k + 1 < sv ? "}," : "}";
+      out += fmt::format("static const {}_real {}_support_vectors[{}][{}] = {{", p, name, sv, d);
+      for (std::size_t k = 0; k < sv; ++k) {
+        out += "\n    {";
+        for (std::size_t j = 0; j < d; ++j) {
+          out += literal(function.support_vectors(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j)));
+          if (j + 1 < d) out += ", ";
         }
-        out += "};\n";
-        out += fmt::format("static const {}_real {}_coefficients[{}] = {{", p, name, sv);
-        append_array(out, literal, function.coefficients.data(), sv);
-        out += "};\n";
+        out += k + 1 < sv ? "}," : "}";
       }
+      out += "};\n";
+      out += fmt::format("static const {}_real {}_coefficients[{}] = {{", p, name, sv);
+      append_array(out, literal, function.coefficients.data(), sv);
+      out += "};\n";
       out += fmt::format(
           "static inline {p}_real {name}_drift(const {p}_real features[{d}]) {{\n"
           "  {p}_real x[{d}];\n"
@@ -294,25 +304,23 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
           "  int j;\n"
           "  for (j = 0; j < {d}; ++j) x[j] = (features[j] - {name}_feature_mean[j]) / {name}_feature_scale[j];\n",
           fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("bias", literal(function.bias)),
-          fmt::arg("carry", single && sv > 0 ? fmt::format("  {}_real carry = 0;\n", p) : std::string()));
-      if (sv > 0) {
-        out += fmt::format(
-            "  {{\n"
-            "    unsigned long k;\n"
-            "    for (k = 0; k < {sv}; ++k) {{\n"
-            "      {p}_real squared = 0;\n"
-            "      for (j = 0; j < {d}; ++j) {{\n"
-            "        const {p}_real difference = {name}_support_vectors[k][j] - x[j];\n"
-            "        squared += difference * difference;\n"
-            "      }}\n"
-            "      {accumulate_term}\n"
-            "    }}\n"
-            "  }}\n",
-            fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("sv", sv),
-            fmt::arg("accumulate_term",
-                     accumulate("sum", "carry", fmt::format("{}_coefficients[k] * {}(-{} * squared)", name, exp_name,
-                                                            literal(function.gamma)))));
-      }
+          fmt::arg("carry", single ? fmt::format("  {}_real carry = 0;\n", p) : std::string()));
+      out += fmt::format(
+          "  {{\n"
+          "    unsigned long k;\n"
+          "    for (k = 0; k < {sv}; ++k) {{\n"
+          "      {p}_real squared = 0;\n"
+          "      for (j = 0; j < {d}; ++j) {{\n"
+          "        const {p}_real difference = {name}_support_vectors[k][j] - x[j];\n"
+          "        squared += difference * difference;\n"
+          "      }}\n"
+          "      {accumulate_term}\n"
+          "    }}\n"
+          "  }}\n",
+          fmt::arg("p", p), fmt::arg("name", name), fmt::arg("d", d), fmt::arg("sv", sv),
+          fmt::arg("accumulate_term",
+                   accumulate("sum", "carry", fmt::format("{}_coefficients[k] * {}(-{} * squared)", name, exp_name,
+                                                          literal(function.gamma)))));
       out += fmt::format("  return sum * {} + {}{};\n}}\n\n", literal(svr->scaling.target_scale),
                          literal(svr->scaling.target_mean),
                          svr->linear_part ? fmt::format(" + {}_linear_part(features)", name) : std::string());

@@ -149,11 +149,12 @@ ModelSize model_size(const DriftModel& model, bool single_precision) {
     if (const auto* svr = std::get_if<SvrModel>(&axis_model.model)) {
       const auto sv = static_cast<std::size_t>(svr->function.support_vectors.rows());
       axis.support_vectors = sv;
-      // support vectors, coefficients, feature mean and scale, bias, gamma, target mean and scale
-      axis.constant_bytes += (sv * d + sv + 2 * d + 4) * real;
+      // support vectors, coefficients, feature mean and scale, bias, gamma, target mean and
+      // scale; without vectors (the kernel left out at fit time) bias, target mean and scale
+      axis.constant_bytes += (sv > 0 ? sv * d + sv + 2 * d + 4 : 3) * real;
       // standardize (2d), per SV: d subtractions, d multiplies, d additions, -γ·s, c·e^…, sum;
       // un-standardize (2)
-      axis.flops_per_sample += 2 * d + sv * (3 * d + 3) + 2;
+      axis.flops_per_sample += (sv > 0 ? 2 * d + sv * (3 * d + 3) : 0) + 2;
       axis.exp_per_sample += sv;
       if (svr->linear_part) {
         axis.regressors = svr->linear_part->regressors.size();

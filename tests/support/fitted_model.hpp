@@ -31,8 +31,9 @@ inline Pipeline chamber_pipeline(double reference_temperature = 20) {
 
 struct FixtureModel {
   // "linear", "svr" (ε-SVR with fixed C = 10, γ = 0.5, ε = 0.05 in standardized units; a
-  // few hundred support vectors) or "partially_linear" (least squares on the terms, that
-  // SVR on its residual).
+  // few hundred support vectors), "partially_linear" (least squares on the terms, that
+  // SVR on its residual) or "linear_part_only" (a partially linear SVR whose kernel fit
+  // left out: no support vectors).
   std::string kind = "linear";
   std::vector<std::string> terms;  // empty: the paper's pair (dT, rate)
   // Linear on the paper's pair: its quadratic regressors (to exercise powers), or plain.
@@ -67,13 +68,17 @@ inline DriftModel fitted_model(const ChamberLog& log, const FixtureModel& fixtur
     } else {
       SvrModel svr;
       Eigen::VectorXd target = table.target;
-      if (fixture.kind == "partially_linear") {
+      if (fixture.kind == "partially_linear" || fixture.kind == "linear_part_only") {
         svr.linear_part = fit_least_squares(table.features, table.target, linear_regressors(terms));
         target -= svr.linear_part->predict(table.features);
       }
       svr.scaling = Standardization::of(table.features, target);
       SvrTrainer trainer(SvrOptions{.C = 10, .gamma = 0.5, .epsilon = 0.05});
       svr.function = trainer.train(svr.scaling.features(table.features), svr.scaling.target(target)).function;
+      if (fixture.kind == "linear_part_only") {
+        svr.function.support_vectors.resize(0, svr.function.support_vectors.cols());
+        svr.function.coefficients.resize(0);
+      }
       svr.C = 10;
       svr.epsilon = 0.05;
       axis.model = std::move(svr);

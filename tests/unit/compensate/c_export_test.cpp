@@ -311,6 +311,17 @@ TEST_F(CExport, PartiallyLinearSvrMatchesCompensator) {
   expect_matches(model, *log_, true, 1e-4);
 }
 
+// A partially linear SVR whose kernel fit left out (fit.kernel_check): its linear part and
+// the kernel's bias, without the kernel's arrays.
+TEST_F(CExport, PartiallyLinearSvrWithoutVectorsMatchesCompensator) {
+  const DriftModel model =
+      fitted_model(*log_, {.kind = "linear_part_only", .terms = {"lag:420", "hinge:420:-10", "lagrate:420", "rate"}});
+  ASSERT_EQ(std::get<SvrModel>(model.axes[0].model).function.support_vectors.rows(), 0);
+  EXPECT_EQ(export_c_header(model, {}).find("_support_vectors"), std::string::npos);
+  expect_matches(model, *log_, false, 1e-9);
+  expect_matches(model, *log_, true, 1e-4);
+}
+
 // grad:A-B and gradrate:A-B on the chamber air as an extra channel (and on another axis'
 // channel), in products too, through a gap: each channel is smoothed in C as in C++.
 TEST_F(CExport, ChannelGradientTermsMatchCompensatorThroughAGap) {
