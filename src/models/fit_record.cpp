@@ -52,6 +52,16 @@ struct Fields<TuningRecord> {
       Field{"seed", &TuningRecord::seed},            Field{"history", &TuningRecord::history}};
 };
 template <>
+struct Fields<KernelCheckRecord> {
+  static constexpr auto list = std::tuple{
+      Field{"folds", &KernelCheckRecord::folds},
+      Field{"folds_by", &KernelCheckRecord::folds_by},
+      Field{"with_kernel_mse", &KernelCheckRecord::with_kernel_mse},
+      Field{"linear_part_mse", &KernelCheckRecord::linear_part_mse},
+      Field{"min_gain", &KernelCheckRecord::min_gain},
+      Field{"kept", &KernelCheckRecord::kept}};
+};
+template <>
 struct Fields<SolverRecord> {
   static constexpr auto list = std::tuple{
       Field{"termination", &SolverRecord::termination},
@@ -126,6 +136,7 @@ struct Fields<FitRecord> {
       Field{"solver", &FitRecord::solver},
       Field{"evaluations", &FitRecord::evaluations},
       Field{"compressed", &FitRecord::compressed},
+      Field{"kernel_check", &FitRecord::kernel_check},
       Field{"feature_selection", &FitRecord::feature_selection},
       Field{"training_samples", &FitRecord::training_samples},
       Field{"in_sample", &FitRecord::in_sample}};
@@ -312,6 +323,7 @@ json to_json(const SolverRecord& record) { return write_record(record); }
 json to_json(const SelectionRecord& record) { return write_record(record); }
 json to_json(const TuningRecord& record) { return write_record(record); }
 json to_json(const CompressionRecord& record) { return write_record(record); }
+json to_json(const KernelCheckRecord& record) { return write_record(record); }
 json fit_record_to_json(const FitRecord& record) { return write_record(record); }
 
 FitRecord fit_record_from_json(const json& object) { return Reader::read_record<FitRecord>(Reader(object, "fit")); }

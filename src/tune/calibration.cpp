@@ -13,6 +13,7 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/svr_model.hpp"
+#include "tune/term_columns.hpp"
 
 namespace thermodrift {
 
@@ -247,8 +248,17 @@ std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetri
 
 std::optional<ExpectedHeldOut> expected_held_out(const FitRecord& fit) {
   if (fit.tuning && fit.tuning->objective == "cv") {
-    return ExpectedHeldOut{fit.tuning->objective_mse,
-                           fmt::format("the tuned SVR's {} CV", cv_name(fit.tuning->folds, fit.tuning->folds_by))};
+    const std::string cv = cv_name(fit.tuning->folds, fit.tuning->folds_by);
+    if (fit.kernel_check) {
+      const KernelCheckRecord& check = *fit.kernel_check;
+      const std::string nested = cv_name(check.folds, check.folds_by);
+      return check.kept ? ExpectedHeldOut{check.with_kernel_mse,
+                                          fmt::format("the SVR's nested {} CV, its linear part refitted per fold", nested)}
+                        : ExpectedHeldOut{check.linear_part_mse,
+                                          fmt::format("the linear part's {} CV; the kernel did not cut it and was left out",
+                                                      nested)};
+    }
+    return ExpectedHeldOut{fit.tuning->objective_mse, fmt::format("the tuned SVR's {} CV", cv)};
   }
   if (fit.feature_selection) {
     const SelectionRecord& selection = *fit.feature_selection;
@@ -327,9 +337,54 @@ std::size_t minimum_samples(ModelKind model, std::size_t terms) {
   return 3;
 }
 
+namespace {
+
+// The linear part fitted on the rows outside `block`: least squares on every column, or
+// the averaged sets' fits, as the identification averaged them on every row.
+LinearModel linear_part_without(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
+                                const std::vector<std::string>& terms,
+                                const std::vector<std::vector<std::string>>& averaged_sets, SampleRange block) {
+  const Eigen::MatrixXd x = rows_except(features, block);
+  const Eigen::VectorXd y = rows_except(target, block);
+  return averaged_sets.empty() ? fit_least_squares(x, y, linear_regressors(terms.size()))
+                               : averaged_least_squares(x, y, terms, averaged_sets);
+}
+
+// KernelCheckRecord's nested CV over identified.held_out, its MSEs in the standardized
+// target's units: in each fold the linear part refitted without the block, the kernel
+// (`solver`'s C, γ, ε) trained on that fit's residual outside it, both judged inside.
+KernelCheckRecord check_kernel(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
+                               const std::vector<std::string>& terms, const IdentifiedLinearPart& identified,
+                               const Standardization& scaling, const SvrOptions& solver) {
+  const Eigen::MatrixXd scaled = scaling.features(features);
+  const SvrTrainer trainer(solver);
+  const std::vector<std::vector<std::string>> none;
+  double with_kernel = 0, without = 0;
+  Eigen::Index rows = 0;
+  for (const SampleRange& block : identified.held_out.blocks) {
+    const LinearModel part =
+        linear_part_without(features, target, terms, identified.fit ? identified.averaged_sets : none, block);
+    const Eigen::VectorXd residual = scaling.target(target - part.predict(features));
+    const SvrFit kernel = trainer.train(rows_except(scaled, block), rows_except(residual, block));
+    const Eigen::VectorXd held = residual.segment(block.begin, block.size());
+    with_kernel += (held - kernel.function.predict(scaled.middleRows(block.begin, block.size()))).squaredNorm();
+    without += held.squaredNorm();
+    rows += block.size();
+  }
+  KernelCheckRecord check;
+  check.folds = identified.held_out.blocks.size();
+  check.folds_by = to_string(identified.held_out.by);
+  check.with_kernel_mse = with_kernel / static_cast<double>(rows);
+  check.linear_part_mse = without / static_cast<double>(rows);
+  return check;
+}
+
+}  // namespace
+
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
-                      bool standardize, std::size_t axis, const LinearModel* linear_fit) {
+                      bool standardize, std::size_t axis, const IdentifiedLinearPart* identified) {
+  const LinearModel* linear_fit = identified && identified->fit ? &*identified->fit : nullptr;
   FittedModel fitted;
   fitted.fit.terms = terms;
   fitted.fit.averaged_linear_part = linear_fit != nullptr && options.model != ModelKind::stepwise;
@@ -359,6 +414,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     SvrOptions solver = options.svr;
     solver.stop = options.stop;
     long evaluations = 1;
+    bool kernel_kept = true;
     if (options.tuning) {
       SvrTuningOptions tuning = *options.tuning;
       tuning.solver.stop = options.stop;
@@ -387,9 +443,26 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       record.epsilon = tuning.epsilon;
       for (const auto& point : tuned.history) record.history.push_back({point.evaluations, in_dph2(point.best_value)});
       fitted.fit.tuning = std::move(record);
+      if (options.partially_linear && identified && identified->held_out.blocks.size() >= 2) {
+        KernelCheckRecord check = check_kernel(features, target, terms, *identified, svr.scaling, solver);
+        check.with_kernel_mse = in_dph2(check.with_kernel_mse);
+        check.linear_part_mse = in_dph2(check.linear_part_mse);
+        check.min_gain = options.selection.min_gain;
+        check.kept = check.with_kernel_mse < (1.0 - check.min_gain) * check.linear_part_mse;
+        kernel_kept = check.kept;
+        fitted.fit.kernel_check = std::move(check);
+      }
     }
-    const SvrTrainer trainer(solver);
-    const SvrFit result = trainer.train(scaled_features, scaled_target);
+    SvrFit result;
+    if (kernel_kept) {
+      const SvrTrainer trainer(solver);
+      result = trainer.train(scaled_features, scaled_target);
+    } else {
+      // The linear part alone: a kernel sum without vectors, its bias the residual's mean.
+      result.function.support_vectors.resize(0, features.cols());
+      result.function.gamma = solver.gamma;
+      result.summary.support_vectors = 0;
+    }
     svr.function = result.function;
     if (options.max_vectors && static_cast<std::size_t>(svr.function.support_vectors.rows()) > *options.max_vectors) {
       const auto in_sample_mse = [&] {
@@ -526,7 +599,7 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     axis_model.pipeline = make_pipeline(logs, axis, options);
     axis_model.kind = options.model;
     std::optional<SelectionRecord> selection_record;
-    std::optional<LinearModel> linear_fit;
+    IdentifiedLinearPart identified;
     if (chooses_features(options)) {
       const FeatureSelectionOptions& selection_options = options.selection;
       FeatureSelection selection = axis < searched.size() ? searched[axis] : search_features(logs, axis, axis_model.pipeline, options);
@@ -547,7 +620,8 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
       axis_model.pipeline.temperature_channel = selection.temperature_channel;
       axis_model.pipeline.validate();
       selection_record = selection.record(selection_options);
-      linear_fit = std::move(selection.linear_fit);
+      identified.fit = std::move(selection.linear_fit);
+      identified.averaged_sets = std::move(selection.averaged_sets);
     }
     const auto& pipeline = axis_model.pipeline;
 
@@ -562,9 +636,10 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                                                axis_options.tuning->folds, options.folds_by);
       if (held_out.by == FoldsBy::runs) axis_options.tuning->blocks = held_out.blocks;
     }
+    identified.held_out = cv_blocks(training.features.rows(), training.run_start, options.selection.folds,
+                                    options.folds_by);
     FittedModel fitted =
-        fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis,
-                  linear_fit ? &*linear_fit : nullptr);
+        fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis, &identified);
     axis_model.model = std::move(fitted.model);
     FitRecord fit = std::move(fitted.fit);
     fit.feature_selection = std::move(selection_record);

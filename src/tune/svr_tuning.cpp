@@ -197,6 +197,8 @@ struct Split {
   Eigen::VectorXd scoring_targets;
 };
 
+}  // namespace
+
 Eigen::MatrixXd rows_except(const Eigen::MatrixXd& matrix, SampleRange block) {
   Eigen::MatrixXd out(matrix.rows() - block.size(), matrix.cols());
   out.topRows(block.begin) = matrix.topRows(block.begin);
@@ -210,8 +212,6 @@ Eigen::VectorXd rows_except(const Eigen::VectorXd& vector, SampleRange block) {
   out.tail(vector.size() - block.end) = vector.tail(vector.size() - block.end);
   return out;
 }
-
-}  // namespace
 
 struct SvrObjective::State {
   std::vector<Split> splits;

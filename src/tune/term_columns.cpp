@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "thermodrift/error.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
@@ -297,6 +298,29 @@ double held_out_mse(const Eigen::VectorXd& predicted, const Eigen::VectorXd& y, 
     held_out += static_cast<double>(block.size());
   }
   return squared_error / held_out;
+}
+
+LinearModel averaged_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                                   const std::vector<std::string>& names,
+                                   const std::vector<std::vector<std::string>>& sets) {
+  LinearModel average;
+  average.regressors = linear_regressors(names.size());
+  average.coefficients = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(names.size()));
+  const double weight = 1.0 / static_cast<double>(sets.size());
+  for (const auto& set : sets) {
+    std::vector<Eigen::Index> columns;
+    for (const auto& name : set) {
+      const auto at = std::find(names.begin(), names.end(), name);
+      if (at == names.end()) throw Error(fmt::format("an averaged set names {}, not one of the terms", name));
+      columns.push_back(at - names.begin());
+    }
+    const LinearModel fit = fit_least_squares(x(Eigen::all, columns), y, linear_regressors(columns.size()));
+    for (std::size_t j = 0; j < columns.size(); ++j) {
+      average.coefficients[columns[j]] += weight * fit.coefficients[static_cast<Eigen::Index>(j)];
+    }
+    average.intercept += weight * fit.intercept;
+  }
+  return average;
 }
 
 double least_squares_cv(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) {

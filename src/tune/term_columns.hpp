@@ -13,6 +13,7 @@
 
 #include "thermodrift/features/pipeline.hpp"
 #include "thermodrift/io/chamber_log.hpp"
+#include "thermodrift/models/linear.hpp"
 #include "thermodrift/tune/calibration.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
@@ -112,6 +113,12 @@ class ColumnCache {
   // Σ a·b over each segment, into pool_; returns its offset.
   std::size_t segment_products(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 };
+
+// The least-squares fits of several term sets (each a subset of `names`, the columns of
+// x) averaged with equal weights: an identification's averaged linear part, over `names`.
+LinearModel averaged_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                                   const std::vector<std::string>& names,
+                                   const std::vector<std::vector<std::string>>& sets);
 
 // Pooled MSE of least squares (with an intercept) over held-out `blocks` (contiguous
 // blocks in time, or runs): each block is predicted by the fit on the rest.

@@ -662,23 +662,14 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     result.cv_mse = kept.front().cv;
     return result;
   }
-  LinearModel average;
-  average.regressors = linear_regressors(names.size());
-  average.coefficients = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(names.size()));
   Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());
   const double weight = 1.0 / static_cast<double>(kept.size());
   for (const auto& member : kept) {
-    const Eigen::MatrixXd x = cache->matrix(member.terms);
-    const LinearModel fit = fit_least_squares(x, y, linear_regressors(member.terms.size()));
-    for (std::size_t j = 0; j < member.terms.size(); ++j) {
-      const auto column = std::find(names.begin(), names.end(), member.terms[j]) - names.begin();
-      average.coefficients[column] += weight * fit.coefficients[static_cast<Eigen::Index>(j)];
-    }
-    average.intercept += weight * fit.intercept;
-    held_out += weight * least_squares_cv_predictions(x, y, result.held_out.blocks);
+    result.averaged_sets.push_back(member.terms);
+    held_out += weight * least_squares_cv_predictions(cache->matrix(member.terms), y, result.held_out.blocks);
   }
   result.cv_mse = held_out_mse(held_out, y, result.held_out.blocks);
-  result.linear_fit = std::move(average);
+  result.linear_fit = averaged_least_squares(cache->matrix(names), y, names, result.averaged_sets);
   result.path.push_back({"average", fmt::format("members {} ({} distinct sets), their fits averaged", kept_numbers, distinct_members),
                          result.cv_mse, names});
   return result;

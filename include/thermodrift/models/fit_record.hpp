@@ -63,6 +63,19 @@ struct SolverRecord {
   std::optional<std::size_t> samples_outside_tube;
 };
 
+// A partially linear SVR's kernel judged after tuning, by nested CV over the feature
+// search's blocks: each fold refits the linear part without its block and trains the
+// kernel (the tuned C, σ, ε) on that fit's residual. The kernel is kept when it cuts the
+// linear part's CV MSE by the search's margin; else the model is its linear part alone.
+struct KernelCheckRecord {
+  std::size_t folds = 0;
+  std::string folds_by = "time";
+  double with_kernel_mse = 0;  // (°/h)², the held-out blocks pooled
+  double linear_part_mse = 0;
+  double min_gain = 0;
+  bool kept = true;
+};
+
 // An SVR reduced to fewer support vectors (models/svr_model.hpp's compress).
 struct CompressionRecord {
   std::string method;
@@ -125,6 +138,7 @@ struct FitRecord {
   std::optional<SolverRecord> solver;
   std::optional<long> evaluations;  // SVR fits behind the final one (1 when not tuned)
   std::optional<CompressionRecord> compressed;
+  std::optional<KernelCheckRecord> kernel_check;
   std::optional<SelectionRecord> feature_selection;
   std::optional<std::size_t> training_samples;
   std::optional<ResidualMetrics> in_sample;
@@ -132,6 +146,7 @@ struct FitRecord {
 
 nlohmann::json fit_record_to_json(const FitRecord& record);
 nlohmann::json to_json(const CompressionRecord& record);
+nlohmann::json to_json(const KernelCheckRecord& record);
 nlohmann::json to_json(const SelectionRecord& record);
 nlohmann::json to_json(const TuningRecord& record);
 nlohmann::json to_json(const SolverRecord& record);

@@ -153,12 +153,23 @@ struct FittedModel {
   FitRecord fit;
   double tuning_seconds = 0;
 };
-// `axis` labels tuning progress. `linear_fit`, when given (an identification's averaged
-// fits, FeatureSelection::linear_fit), is the linear model, or the partially linear SVR's
-// linear part, instead of a least-squares fit; stepwise ignores it.
+// What an identification hands the model on top: its linear fit (FeatureSelection::
+// linear_fit; absent: least squares on the terms), the term sets that fit averages, and
+// the held-out blocks of its CV over the rows of the features.
+struct IdentifiedLinearPart {
+  std::optional<LinearModel> fit;
+  std::vector<std::vector<std::string>> averaged_sets;
+  HeldOutBlocks held_out;
+};
+// `axis` labels tuning progress. `identified->fit`, when given, is the linear model, or the
+// partially linear SVR's linear part, instead of a least-squares fit; stepwise ignores it.
+// A partially linear SVR tuned by CV with `identified` has its kernel judged after tuning
+// by nested CV over identified->held_out (KernelCheckRecord): kept when it cuts the linear
+// part's CV MSE by options.selection.min_gain, else left out (the SVR has no support
+// vectors: its linear part alone).
 FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& target,
                       const std::vector<std::string>& terms, const CalibrationOptions& options,
-                      bool standardize, std::size_t axis = 0, const LinearModel* linear_fit = nullptr);
+                      bool standardize, std::size_t axis = 0, const IdentifiedLinearPart* identified = nullptr);
 std::size_t minimum_samples(ModelKind model, std::size_t terms);
 
 // libsvm-format data is used exactly as given: no smoothing, no pipeline, no scaling, so

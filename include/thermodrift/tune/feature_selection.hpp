@@ -115,6 +115,8 @@ struct FeatureSelection {
   // over `terms` (the union of their sets): the linear model, or the SVR's linear part,
   // instead of a least-squares refit on the union.
   std::optional<LinearModel> linear_fit;
+  // The term sets whose fits linear_fit averages (each a subset of `terms`).
+  std::vector<std::vector<std::string>> averaged_sets;
   // thermal_node: the temperature channel the node was found on, when not the axis' own
   // (Pipeline::temperature_channel).
   std::optional<std::size_t> temperature_channel;

@@ -130,6 +130,9 @@ struct HeldOutBlocks {
   std::string describe() const;  // "blocked 10-fold" or "leave-one-run-out (3 runs)"
 };
 HeldOutBlocks cv_blocks(Eigen::Index samples, const std::vector<std::size_t>& run_start, int folds, FoldsBy by);
+// The rows outside `block`, in order: a fold's training rows.
+Eigen::MatrixXd rows_except(const Eigen::MatrixXd& matrix, SampleRange block);
+Eigen::VectorXd rows_except(const Eigen::VectorXd& vector, SampleRange block);
 // The held-out part of a holdout split: the last round(f n) samples (at least one, and at
 // least one left to train on). UsageError unless n ≥ 2 and 0 < f < 1.
 SampleRange holdout_range(Eigen::Index samples, double fraction);

@@ -63,6 +63,14 @@ FitRecord every_member() {
   c.data = std::vector<std::string>{"cycle2.csv"};
   c.settle_seconds = 1800;
   r.compressed = c;
+  KernelCheckRecord k;
+  k.folds = 10;
+  k.folds_by = "time";
+  k.with_kernel_mse = 0.0125;
+  k.linear_part_mse = 0.0121;
+  k.min_gain = 0.1;
+  k.kept = false;
+  r.kernel_check = k;
   SelectionRecord f;
   f.method = "thermal_node";
   f.scored_by = "least squares";
@@ -106,6 +114,9 @@ TEST(FitRecord, EveryMemberSurvivesItsJson) {
   EXPECT_EQ(back.compressed->data, std::optional<std::vector<std::string>>(std::vector<std::string>{"cycle2.csv"}));
   EXPECT_EQ(json["compressed"]["training_mse_unit"], "(deg/h)^2");
   EXPECT_EQ(json["tuning"]["box"]["epsilon"], nlohmann::json::array({0.001, 0.2}));
+  ASSERT_TRUE(back.kernel_check);
+  EXPECT_FALSE(back.kernel_check->kept);
+  EXPECT_EQ(back.kernel_check->linear_part_mse, 0.0121);
 }
 
 TEST(FitRecord, AnEmptyRecordWritesOnlyItsTerms) {
