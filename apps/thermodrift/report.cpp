@@ -133,6 +133,17 @@ void print_report_tables(const nlohmann::json& summary) {
       fmt::print("\n");
     }
   }
+  // Where a partially linear SVR's kernel was left out, its column is its linear part's.
+  bool first = true;
+  for (const auto& entry : summary.value("feature_selection", nlohmann::json::array())) {
+    for (const auto& chosen : entry["chosen"]) {
+      if (!chosen.contains("kernel_check")) continue;
+      if (first) fmt::print("\n");
+      first = false;
+      fmt::print("{}, {} on the chosen terms: kernel {}\n", entry["axis"].get<std::string>(),
+                 chosen["label"].get<std::string>(), kernel_check_text(chosen["kernel_check"]));
+    }
+  }
 }
 
 Command add_report(CLI::App& parent) {

@@ -205,6 +205,11 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
         for (const auto& t : chosen["terms"]) terms += (terms.empty() ? "" : ", ") + t.get<std::string>();
         page << "<tr><td><b>chosen</b>, " << escape(chosen["label"].get<std::string>()) << "</td><td><code>"
              << escape(terms) << "</code></td><td>" << num(chosen["cv_mse"]) << "</td></tr>\n";
+        if (chosen.contains("kernel_check")) {
+          const auto& check = chosen["kernel_check"];
+          page << "<tr><td>kernel, nested CV</td><td>" << escape(kernel_check_text(check)) << "</td><td>"
+               << num(check["with_kernel_mse"]) << "</td></tr>\n";
+        }
       }
       page << "</table>\n";
     }

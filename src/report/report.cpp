@@ -21,6 +21,19 @@ std::string format_number(double value) {
   return fmt::format("{:.4g}", value);
 }
 
+std::string kernel_check_text(const nlohmann::json& check) {
+  const double with_kernel = check.at("with_kernel_mse").get<double>();
+  const double linear = check.at("linear_part_mse").get<double>();
+  const std::string cv = fmt::format("nested {}-fold CV", check.at("folds").get<std::size_t>());
+  if (check.at("kept").get<bool>()) {
+    return fmt::format("kept: {} MSE {} (°/h)² against the linear part's {}", cv, format_number(with_kernel),
+                       format_number(linear));
+  }
+  return fmt::format("left out: {} MSE {} (°/h)² against the linear part's {}, not {:g} % lower; the model is its "
+                     "linear part",
+                     cv, format_number(with_kernel), format_number(linear), 100 * check.at("min_gain").get<double>());
+}
+
 namespace {
 
 using namespace report_detail;
@@ -336,6 +349,9 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
                                  {"terms", selection->terms},
                                  {"scored_by", selection->scored_by},
                                  {"cv_mse", selection->cv_mse}});
+      if (const auto& check = m.calibration.model.axes[a].fit.kernel_check) {
+        entry["chosen"].back()["kernel_check"] = to_json(*check);
+      }
     }
     if (entry.contains("selection")) selections.push_back(std::move(entry));
   }

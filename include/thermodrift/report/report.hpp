@@ -70,4 +70,8 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
 // How the page prints every number (4 significant digits); tests compare with it.
 std::string format_number(double value);
 
+// A partially linear SVR's kernel check (fit.kernel_check's JSON) in words: "kept: ..." or
+// "left out: ...", with both nested CV MSEs.
+std::string kernel_check_text(const nlohmann::json& check);
+
 }  // namespace thermodrift
