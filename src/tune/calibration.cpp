@@ -458,7 +458,8 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       const SvrTrainer trainer(solver);
       result = trainer.train(scaled_features, scaled_target);
     } else {
-      // The linear part alone: a kernel sum without vectors, its bias the residual's mean.
+      // The linear part alone: a kernel sum without vectors and a bias of 0, so each
+      // prediction is the linear part plus the residual's mean (the target scaling's).
       result.function.support_vectors.resize(0, features.cols());
       result.function.gamma = solver.gamma;
       result.summary.support_vectors = 0;
@@ -485,7 +486,7 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
     fitted.fit.params = SvrParameters{svr.C, svr.sigma(), svr.function.gamma, svr.epsilon};
     fitted.fit.standardized = standardize;
     SolverRecord solver_record;
-    solver_record.termination = to_string(result.summary.termination);
+    solver_record.termination = kernel_kept ? to_string(result.summary.termination) : "not trained: kernel left out";
     solver_record.iterations = result.summary.iterations;
     solver_record.support_vectors = result.summary.support_vectors;
     solver_record.dual_objective = result.summary.dual_objective;

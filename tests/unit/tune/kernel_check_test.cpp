@@ -77,6 +77,8 @@ TEST(KernelCheck, ALinearDriftWithWhiteNoiseLeavesTheKernelOut) {
   // Left out: no vectors, and the model predicts its linear part (plus the residual's mean).
   const auto& svr = std::get<SvrModel>(fitted.model);
   EXPECT_EQ(svr.function.support_vectors.rows(), 0);
+  ASSERT_TRUE(fitted.fit.solver.has_value());
+  EXPECT_EQ(fitted.fit.solver->termination, "not trained: kernel left out");
   ASSERT_TRUE(svr.linear_part.has_value());
   const Eigen::VectorXd linear = svr.linear_part->predict(data.features);
   for (Eigen::Index i = 0; i < data.features.rows(); i += 97) {
