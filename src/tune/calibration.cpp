@@ -248,7 +248,6 @@ std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetri
 
 std::optional<ExpectedHeldOut> expected_held_out(const FitRecord& fit) {
   if (fit.tuning && fit.tuning->objective == "cv") {
-    const std::string cv = cv_name(fit.tuning->folds, fit.tuning->folds_by);
     if (fit.kernel_check) {
       const KernelCheckRecord& check = *fit.kernel_check;
       const std::string nested = cv_name(check.folds, check.folds_by);
@@ -258,7 +257,8 @@ std::optional<ExpectedHeldOut> expected_held_out(const FitRecord& fit) {
                                           fmt::format("the linear part's {} CV; the kernel did not cut it and was left out",
                                                       nested)};
     }
-    return ExpectedHeldOut{fit.tuning->objective_mse, fmt::format("the tuned SVR's {} CV", cv)};
+    return ExpectedHeldOut{fit.tuning->objective_mse,
+                           fmt::format("the tuned SVR's {} CV", cv_name(fit.tuning->folds, fit.tuning->folds_by))};
   }
   if (fit.feature_selection) {
     const SelectionRecord& selection = *fit.feature_selection;
@@ -637,8 +637,10 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                                                axis_options.tuning->folds, options.folds_by);
       if (held_out.by == FoldsBy::runs) axis_options.tuning->blocks = held_out.blocks;
     }
-    identified.held_out = cv_blocks(training.features.rows(), training.run_start, options.selection.folds,
-                                    options.folds_by);
+    if (axis_options.partially_linear && options.model == ModelKind::svr) {  // the blocks of its kernel check
+      identified.held_out = cv_blocks(training.features.rows(), training.run_start, options.selection.folds,
+                                      options.folds_by);
+    }
     FittedModel fitted =
         fit_model(training.features, training.target, pipeline.term_names(), axis_options, true, axis, &identified);
     axis_model.model = std::move(fitted.model);
