@@ -19,7 +19,6 @@ namespace thermodrift {
 namespace {
 
 using Terms = std::vector<std::string>;
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // `terms` with every time constant equal to `from` set to `to`.
 std::vector<std::string> with_time_constant(const std::vector<std::string>& terms, double from, double to) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -18,6 +19,9 @@
 #include "thermodrift/tune/svr_tuning.hpp"
 
 namespace thermodrift {
+
+// The score of a set no fit could be judged for (and the start of every minimum).
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // The blocked CV MSE of a least-squares fit and the cancellation of the fit on all rows
 // (models/linear.hpp), as least_squares_cv_score and ColumnCache::cv_score give them.

@@ -12,7 +12,6 @@ namespace thermodrift {
 
 namespace {
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // The memory rate scales of the searches whose fits are averaged (°C/min; 0: the default,
 // kDirectionRateScale = 0.2): about a factor 3 either side of it.
 constexpr double kMemoryRateScales[] = {0, 0.07, 0.5};

@@ -18,19 +18,17 @@ namespace {
 using testing::CommandResult;
 using testing::TempDir;
 
-CommandResult thermodrift(const TempDir& dir, const std::string& arguments) {
-  return testing::run_thermodrift(dir, arguments);
-}
+using testing::run_thermodrift;
 
-const std::string kColumns = " --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z";
+using testing::kColumns;
 
 // fit -> evaluate -> export -> compile; every step must succeed and every metric be finite.
 void expect_round_trip(const TempDir& dir, const std::string& log, const std::string& model,
                        const std::string& fit_options) {
   SCOPED_TRACE(log + " " + model);
   const std::string file = log + "." + model + ".json";
-  const auto fit = thermodrift(dir, "fit --data " + log + kColumns + " --model " + model + " --features auto" +
-                                        fit_options + " --out " + file + " --json");
+  const auto fit = run_thermodrift(dir, "fit --data " + log + kColumns + " --model " + model + " --features auto" +
+                                            fit_options + " --out " + file + " --json");
   ASSERT_EQ(fit.status, 0) << fit.err;
   // fit says what to expect held out: the blocked-CV MSE, against the floor estimate.
   const auto fitted = nlohmann::json::parse(fit.out);
@@ -39,7 +37,7 @@ void expect_round_trip(const TempDir& dir, const std::string& log, const std::st
     EXPECT_GT(axis["expected_held_out"]["cv_mse"].get<double>(), 0.0);
     EXPECT_GT(axis["expected_held_out"]["x_floor_estimate"].get<double>(), 0.0);
   }
-  const auto evaluate = thermodrift(dir, "evaluate --model " + file + " --data " + log + kColumns + " --json");
+  const auto evaluate = run_thermodrift(dir, "evaluate --model " + file + " --data " + log + kColumns + " --json");
   ASSERT_EQ(evaluate.status, 0) << evaluate.err;
   const auto result = nlohmann::json::parse(evaluate.out);
   ASSERT_EQ(result["axes"].size(), 3u);
@@ -49,7 +47,7 @@ void expect_round_trip(const TempDir& dir, const std::string& log, const std::st
     EXPECT_LT(after, axis["mse_before"].get<double>()) << "in-sample, a fitted model must beat a constant";
   }
   const std::string header = log + "." + model + ".h";
-  const auto exported = thermodrift(dir, "export --model " + file + " --out " + header);
+  const auto exported = run_thermodrift(dir, "export --model " + file + " --out " + header);
   ASSERT_EQ(exported.status, 0) << exported.err;
   dir.write("use_" + model + ".c", "#include \"" + header + "\"\nint main(void) { return 0; }\n");
   const auto compiled = testing::run_in(dir, "gcc -std=c99 -Wall -Wextra -Werror -pedantic -c use_" + model +
@@ -69,7 +67,7 @@ TEST_P(FitAlwaysLoads, OneModelOnADrawnLaw) {
   const int law = GetParam();
   const std::string log = "law" + std::to_string(law) + ".csv";
   const auto simulated =
-      thermodrift(dir, "simulate --law " + std::to_string(law) + " --profile cycle --cycles 1 --out " + log);
+      run_thermodrift(dir, "simulate --law " + std::to_string(law) + " --profile cycle --cycles 1 --out " + log);
   ASSERT_EQ(simulated.status, 0) << simulated.err;
   if (law == 2) {
     expect_round_trip(dir, log, "linear", "");
@@ -87,7 +85,7 @@ INSTANTIATE_TEST_SUITE_P(DevelopmentLaws, FitAlwaysLoads, ::testing::Values(2, 8
 
 TEST(FitAlwaysLoadsSvr, SvrOnADrawnLaw) {
   TempDir dir;
-  const auto simulated = thermodrift(dir, "simulate --law 5 --profile staircase --cycles 1 --out law5.csv");
+  const auto simulated = run_thermodrift(dir, "simulate --law 5 --profile staircase --cycles 1 --out law5.csv");
   ASSERT_EQ(simulated.status, 0) << simulated.err;
   expect_round_trip(dir, "law5.csv", "svr", " --evaluations 6");
 }

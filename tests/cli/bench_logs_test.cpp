@@ -25,9 +25,9 @@ using testing::CommandResult;
 using testing::read_file;
 using testing::split_lines;
 using testing::TempDir;
-constexpr auto thermodrift = testing::run_thermodrift;
+using testing::run_thermodrift;
 
-const std::string kColumns = " --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z";
+using testing::kColumns;
 // The raw-count unit of the issue: °C = 0.00390625·raw - 231, gyro in rad/s halved.
 const std::string kRawOptions = " --temp-scale 0.00390625 --temp-offset -231 --gyro-unit radps --gyro-scale 0.5";
 constexpr double kTemperatureScale = 0.00390625;
@@ -35,7 +35,7 @@ constexpr double kTemperatureOffset = -231;
 constexpr double kGyroScale = 0.5;
 const double kRadiansPerSecondInDegreesPerHour = 3600.0 * 180.0 / std::numbers::pi;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
 using testing::cells_of;
 std::string join(const std::vector<std::string>& cells) { return testing::join_cells(cells); }
@@ -96,7 +96,7 @@ class BenchLogs : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = std::make_unique<TempDir>();
-    ASSERT_EQ(thermodrift(*dir_, "simulate --cycles 1 --out s.csv").status, 0);
+    ASSERT_EQ(run_thermodrift(*dir_, "simulate --cycles 1 --out s.csv").status, 0);
     const auto lines = split_lines(read_file(dir_->file("s.csv")));
     const auto header = cells_of(lines.front());
     ASSERT_EQ(header[0], "time_s");
@@ -123,8 +123,8 @@ class BenchLogs : public ::testing::Test {
     dir_->write("iso.csv", iso);
     dir_->write("raw.csv", raw);
     for (const auto& [name, options] : {std::pair{"s", ""}, {"ms", " --time-unit ms"}, {"iso", ""}, {"raw", kRawOptions.c_str()}}) {
-      const auto fit = thermodrift(*dir_, fmt::format("fit --data {}.csv{}{} --model linear --out {}.json", name, kColumns,
-                                                      options, name));
+      const auto fit = run_thermodrift(
+          *dir_, fmt::format("fit --data {}.csv{}{} --model linear --out {}.json", name, kColumns, options, name));
       ASSERT_EQ(fit.status, 0) << name << ": " << fit.err;
     }
   }
@@ -171,9 +171,9 @@ TEST_F(BenchLogs, RawCountLogGivesTheModelOfTheConvertedLog) {
 
 // The model knows how its log reads: no option repeated.
 TEST_F(BenchLogs, EvaluateReadsTheRawLogWithTheModelAlone) {
-  const auto raw = thermodrift(*dir_, "evaluate --model raw.json --data raw.csv --json");
+  const auto raw = run_thermodrift(*dir_, "evaluate --model raw.json --data raw.csv --json");
   ASSERT_EQ(raw.status, 0) << raw.err;
-  const auto converted = thermodrift(*dir_, "evaluate --model s.json --data s.csv --json");
+  const auto converted = run_thermodrift(*dir_, "evaluate --model s.json --data s.csv --json");
   ASSERT_EQ(converted.status, 0) << converted.err;
   const auto raw_axes = nlohmann::json::parse(raw.out)["axes"];
   const auto converted_axes = nlohmann::json::parse(converted.out)["axes"];
@@ -189,8 +189,8 @@ TEST_F(BenchLogs, EvaluateReadsTheRawLogWithTheModelAlone) {
 
 TEST_F(BenchLogs, CompensateEchoesRawRowsAndAgreesWithTheConvertedLog) {
   for (const auto& [model, data] : {std::pair{"raw", "raw"}, {"s", "s"}, {"iso", "iso"}}) {
-    const auto run = thermodrift(*dir_, fmt::format("compensate --model {}.json --data {}.csv --out {}_out.csv", model,
-                                                    data, data));
+    const auto run = run_thermodrift(
+        *dir_, fmt::format("compensate --model {}.json --data {}.csv --out {}_out.csv", model, data, data));
     ASSERT_EQ(run.status, 0) << run.err;
     EXPECT_TRUE(contains(run.err, fmt::format("{}.csv: 200 of 22800 rows not ready (warm-up / gaps)", data))) << run.err;
     EXPECT_FALSE(contains(run.err, "warning")) << run.err;
@@ -219,7 +219,7 @@ TEST_F(BenchLogs, CompensateEchoesRawRowsAndAgreesWithTheConvertedLog) {
 
 // A log in ms read as s: every step is 1000 s, longer than the gap threshold.
 TEST_F(BenchLogs, CompensateSaysWhyALogWasNeverReady) {
-  const auto run = thermodrift(*dir_, "compensate --model s.json --data ms.csv --out never.csv");
+  const auto run = run_thermodrift(*dir_, "compensate --model s.json --data ms.csv --out never.csv");
   ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_TRUE(contains(run.err, "thermodrift: warning: compensate: gyro_x: never ready: all 22800 rows")) << run.err;
   EXPECT_TRUE(contains(run.err, "every time step was a gap")) << run.err;
@@ -228,19 +228,20 @@ TEST_F(BenchLogs, CompensateSaysWhyALogWasNeverReady) {
   EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 2) << run.err;
 
   // The option on the command line takes over the model's unit: then it is ready.
-  const auto fixed = thermodrift(*dir_, "compensate --model s.json --data ms.csv --time-unit ms --out fixed.csv");
+  const auto fixed = run_thermodrift(*dir_, "compensate --model s.json --data ms.csv --time-unit ms --out fixed.csv");
   ASSERT_EQ(fixed.status, 0) << fixed.err;
   EXPECT_TRUE(contains(fixed.err, "ms.csv: 200 of 22800 rows not ready")) << fixed.err;
 
   // A log in s read as ms lasts 22.8 s: shorter than the warm-up.
-  const auto short_run = thermodrift(*dir_, "compensate --model s.json --data s.csv --time-unit ms --out short.csv");
+  const auto short_run =
+      run_thermodrift(*dir_, "compensate --model s.json --data s.csv --time-unit ms --out short.csv");
   ASSERT_EQ(short_run.status, 0) << short_run.err;
   EXPECT_TRUE(contains(short_run.err, "shorter than the 200 s warm-up")) << short_run.err;
 }
 
 TEST_F(BenchLogs, ExportedHeaderOfARawModelSaysItTakesRawValues) {
-  ASSERT_EQ(thermodrift(*dir_, "export --model raw.json --out raw.h").status, 0);
-  ASSERT_EQ(thermodrift(*dir_, "export --model s.json --out s.h").status, 0);
+  ASSERT_EQ(run_thermodrift(*dir_, "export --model raw.json --out raw.h").status, 0);
+  ASSERT_EQ(run_thermodrift(*dir_, "export --model s.json --out s.h").status, 0);
   const std::string raw = read_file(dir_->file("raw.h"));
   const std::string plain = read_file(dir_->file("s.h"));
   EXPECT_TRUE(contains(raw, "#define THERMODRIFT_RAW_INPUTS 1")) << raw.substr(0, 2000);
@@ -252,7 +253,7 @@ TEST_F(BenchLogs, ExportedHeaderOfARawModelSaysItTakesRawValues) {
 TEST_F(BenchLogs, BadScalingIsAUsageError) {
   for (const std::string options : {" --temp-scale 0", " --gyro-scale 0", " --temp-scale 1,2", " --gyro-scale inf",
                                     " --time-unit min"}) {
-    const auto run = thermodrift(*dir_, "fit --data s.csv" + kColumns + options + " --model linear --out bad.json");
+    const auto run = run_thermodrift(*dir_, "fit --data s.csv" + kColumns + options + " --model linear --out bad.json");
     EXPECT_EQ(run.status, 2) << options << ": " << run.err;
     EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
   }

@@ -13,7 +13,7 @@
 namespace thermodrift::testing {
 namespace {
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
 class ClearMessages : public ::testing::Test {
  protected:

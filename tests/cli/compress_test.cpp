@@ -12,7 +12,7 @@
 namespace thermodrift::testing {
 namespace {
 
-const std::string kColumns = " --gyro gyro_x,gyro_y --temp temp_x,temp_y";
+const std::string kTwoAxes = " --gyro gyro_x,gyro_y --temp temp_x,temp_y";
 
 std::size_t most_vectors(const std::string& model_file) {
   std::size_t most = 0;
@@ -24,7 +24,7 @@ std::size_t most_vectors(const std::string& model_file) {
 }
 
 double mse_after(const TempDir& dir, const std::string& model_file, std::size_t axis) {
-  const auto result = run_thermodrift(dir, "evaluate --json --model " + model_file + " --data log.csv" + kColumns);
+  const auto result = run_thermodrift(dir, "evaluate --json --model " + model_file + " --data log.csv" + kTwoAxes);
   EXPECT_EQ(result.status, 0) << result.err;
   return nlohmann::json::parse(result.out)["axes"][axis]["mse_after"].get<double>();
 }
@@ -32,12 +32,12 @@ double mse_after(const TempDir& dir, const std::string& model_file, std::size_t 
 TEST(Compress, WritesAModelOfAtMostKVectorsThatPredictsLikeTheOriginal) {
   TempDir dir;
   ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.2 --out log.csv").status, 0);
-  const auto fit = run_thermodrift(dir, "fit --data log.csv --model svr --C 100 --sigma 1 --out svr.json" + kColumns);
+  const auto fit = run_thermodrift(dir, "fit --data log.csv --model svr --C 100 --sigma 1 --out svr.json" + kTwoAxes);
   ASSERT_EQ(fit.status, 0) << fit.err;
   ASSERT_GT(most_vectors(dir.file("svr.json")), 100u);
 
-  const auto compressed =
-      run_thermodrift(dir, "compress --model svr.json --max-vectors 24 --data log.csv --json --out small.json" + kColumns);
+  const auto compressed = run_thermodrift(
+      dir, "compress --model svr.json --max-vectors 24 --data log.csv --json --out small.json" + kTwoAxes);
   ASSERT_EQ(compressed.status, 0) << compressed.err;
   EXPECT_LE(most_vectors(dir.file("small.json")), 24u);
   const auto report = nlohmann::json::parse(compressed.out);
@@ -60,7 +60,7 @@ TEST(Compress, FitMaxVectorsRecordsTheInSampleCost) {
   TempDir dir;
   ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.2 --out log.csv").status, 0);
   const auto fit = run_thermodrift(
-      dir, "fit --data log.csv --model svr --C 100 --sigma 1 --max-vectors 32 --json --out svr.json" + kColumns);
+      dir, "fit --data log.csv --model svr --C 100 --sigma 1 --max-vectors 32 --json --out svr.json" + kTwoAxes);
   ASSERT_EQ(fit.status, 0) << fit.err;
   EXPECT_LE(most_vectors(dir.file("svr.json")), 32u);
   const auto printed = nlohmann::json::parse(fit.out);
@@ -74,11 +74,11 @@ TEST(Compress, FitMaxVectorsRecordsTheInSampleCost) {
 TEST(Compress, RefusesWhatItCannotCompress) {
   TempDir dir;
   ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
-  ASSERT_EQ(run_thermodrift(dir, "fit --data log.csv --model linear --out linear.json" + kColumns).status, 0);
+  ASSERT_EQ(run_thermodrift(dir, "fit --data log.csv --model linear --out linear.json" + kTwoAxes).status, 0);
   const auto linear = run_thermodrift(dir, "compress --model linear.json --out small.json");
   EXPECT_EQ(linear.status, 2);
   EXPECT_NE(linear.err.find("has no SVR axis"), std::string::npos) << linear.err;
-  const auto option = run_thermodrift(dir, "fit --data log.csv --model linear --max-vectors 8 --out m.json" + kColumns);
+  const auto option = run_thermodrift(dir, "fit --data log.csv --model linear --max-vectors 8 --out m.json" + kTwoAxes);
   EXPECT_EQ(option.status, 2);
   EXPECT_NE(option.err.find("--max-vectors applies to --model svr"), std::string::npos) << option.err;
   EXPECT_EQ(run_thermodrift(dir, "compress --model linear.json --max-vectors 0 --out small.json").status, 2);

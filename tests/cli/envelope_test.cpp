@@ -20,14 +20,14 @@ using testing::CommandResult;
 using testing::read_file;
 using testing::split_lines;
 using testing::TempDir;
-constexpr auto thermodrift = testing::run_thermodrift;
+using testing::run_thermodrift;
 
-const std::string kColumns = " --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z";
+using testing::kColumns;
 // The default cycle heats from 20 to 60 °C after a one-hour soak, soaks an hour there,
 // then cools: before this time the log has only heated.
 constexpr double kHeatingEndsSeconds = 9600;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
 nlohmann::json parse(const CommandResult& result) {
   EXPECT_TRUE(nlohmann::json::accept(result.out)) << result.out;
@@ -40,17 +40,17 @@ class Envelope : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = std::make_unique<TempDir>();
-    ASSERT_EQ(thermodrift(*dir_, "simulate --cycles 1 --out cycle.csv").status, 0);
-    ASSERT_EQ(thermodrift(*dir_, "simulate --cycles 1 --seed 2 --max-temp 80 --out hot.csv").status, 0);
+    ASSERT_EQ(run_thermodrift(*dir_, "simulate --cycles 1 --out cycle.csv").status, 0);
+    ASSERT_EQ(run_thermodrift(*dir_, "simulate --cycles 1 --seed 2 --max-temp 80 --out hot.csv").status, 0);
     const auto lines = split_lines(read_file(dir_->file("cycle.csv")));
     std::string heating = lines.front() + "\n";
     for (std::size_t i = 1; i < lines.size(); ++i) {
       if (std::stod(lines[i].substr(0, lines[i].find(','))) < kHeatingEndsSeconds) heating += lines[i] + "\n";
     }
     dir_->write("heating.csv", heating);
-    full_fit_ = thermodrift(*dir_, "fit --data cycle.csv" + kColumns + " --out full.json --json");
+    full_fit_ = run_thermodrift(*dir_, "fit --data cycle.csv" + kColumns + " --out full.json --json");
     ASSERT_EQ(full_fit_.status, 0) << full_fit_.err;
-    heating_fit_ = thermodrift(*dir_, "fit --data heating.csv" + kColumns + " --out heating.json --json");
+    heating_fit_ = run_thermodrift(*dir_, "fit --data heating.csv" + kColumns + " --out heating.json --json");
     ASSERT_EQ(heating_fit_.status, 0) << heating_fit_.err;
   }
   static void TearDownTestSuite() { dir_.reset(); }
@@ -88,7 +88,7 @@ TEST_F(Envelope, FitOnAHeatingOnlyLogWarnsAboutCooling) {
   EXPECT_FALSE(contains(heating_fit_.err, "never seen heating")) << heating_fit_.err;
   const auto json = parse(heating_fit_);  // the warning stays off stdout
   EXPECT_FALSE(json["axes"][0]["training_envelope"]["cooling_seen"].get<bool>());
-  const auto table = thermodrift(*dir_, "fit --data heating.csv" + kColumns + " --out table.json");
+  const auto table = run_thermodrift(*dir_, "fit --data heating.csv" + kColumns + " --out table.json");
   ASSERT_EQ(table.status, 0) << table.err;
   EXPECT_TRUE(contains(table.out, "gyro_x training envelope: T ")) << table.out;
   EXPECT_TRUE(contains(table.out, "heating seen, cooling never")) << table.out;
@@ -96,7 +96,7 @@ TEST_F(Envelope, FitOnAHeatingOnlyLogWarnsAboutCooling) {
 }
 
 TEST_F(Envelope, EvaluateFlagsTheCoolingAHeatingOnlyModelNeverSaw) {
-  const auto result = thermodrift(*dir_, "evaluate --model heating.json --data cycle.csv --json");
+  const auto result = run_thermodrift(*dir_, "evaluate --model heating.json --data cycle.csv --json");
   ASSERT_EQ(result.status, 0) << result.err;
   EXPECT_TRUE(contains(result.err, "outside the training envelope")) << result.err;
   EXPECT_TRUE(contains(result.err, "cooling never seen in training")) << result.err;
@@ -112,13 +112,13 @@ TEST_F(Envelope, EvaluateFlagsTheCoolingAHeatingOnlyModelNeverSaw) {
 }
 
 TEST_F(Envelope, EvaluateCountsAHotterLogOutsideAndItsOwnLogInside) {
-  const auto own = thermodrift(*dir_, "evaluate --model full.json --data cycle.csv --json");
+  const auto own = run_thermodrift(*dir_, "evaluate --model full.json --data cycle.csv --json");
   ASSERT_EQ(own.status, 0) << own.err;
   EXPECT_FALSE(contains(own.err, "envelope")) << own.err;
   const nlohmann::json own_json = parse(own);
   for (const auto& axis : own_json["axes"]) EXPECT_EQ(axis.at("outside_envelope").get<std::size_t>(), 0u);
 
-  const auto hot = thermodrift(*dir_, "evaluate --model full.json --data hot.csv --json");
+  const auto hot = run_thermodrift(*dir_, "evaluate --model full.json --data hot.csv --json");
   ASSERT_EQ(hot.status, 0) << hot.err;
   EXPECT_TRUE(contains(hot.err, "temperature above")) << hot.err;
   const nlohmann::json hot_json = parse(hot);
@@ -127,12 +127,12 @@ TEST_F(Envelope, EvaluateCountsAHotterLogOutsideAndItsOwnLogInside) {
     EXPECT_GT(axis.at("outside_envelope_fraction").get<double>(), 0.0);
     EXPECT_LT(axis.at("outside_envelope_fraction").get<double>(), 0.5);
   }
-  const auto table = thermodrift(*dir_, "evaluate --model full.json --data hot.csv");
+  const auto table = run_thermodrift(*dir_, "evaluate --model full.json --data hot.csv");
   EXPECT_TRUE(contains(table.out, "gyro_x outside the training envelope: ")) << table.out;
 }
 
 TEST_F(Envelope, CompensateWarnsOfAHotterLogAndFlagsItsRows) {
-  const auto result = thermodrift(*dir_, "compensate --model full.json --data hot.csv --flags --out flagged.csv");
+  const auto result = run_thermodrift(*dir_, "compensate --model full.json --data hot.csv --flags --out flagged.csv");
   ASSERT_EQ(result.status, 0) << result.err;
   const std::regex warning(
       R"(compensate: gyro_x: (\d+) of (\d+) rows outside the training envelope \(temperature above [0-9.]+ °C[^)]*\); (\d+) rows not ready \(warm-up\))");
@@ -159,7 +159,7 @@ TEST_F(Envelope, CompensateWarnsOfAHotterLogAndFlagsItsRows) {
   EXPECT_TRUE(lines[1].ends_with(",1,1,1")) << lines[1];  // the first row is in the warm-up
 
   // Without --flags the output keeps its columns.
-  const auto plain = thermodrift(*dir_, "compensate --model full.json --data hot.csv --out plain.csv");
+  const auto plain = run_thermodrift(*dir_, "compensate --model full.json --data hot.csv --out plain.csv");
   ASSERT_EQ(plain.status, 0) << plain.err;
   EXPECT_TRUE(split_lines(read_file(dir_->file("plain.csv")))[0].ends_with("gyro_z_comp_dph"));
 }
@@ -167,7 +167,7 @@ TEST_F(Envelope, CompensateWarnsOfAHotterLogAndFlagsItsRows) {
 // A log inside the envelope compensates without a word (its warm-up is normal); a log
 // shorter than the warm-up is never ready, and that is said per axis.
 TEST_F(Envelope, CompensateIsQuietInsideTheEnvelopeAndSaysWhenNeverReady) {
-  const auto own = thermodrift(*dir_, "compensate --model full.json --data cycle.csv --out own.csv");
+  const auto own = run_thermodrift(*dir_, "compensate --model full.json --data cycle.csv --out own.csv");
   ASSERT_EQ(own.status, 0) << own.err;
   EXPECT_FALSE(contains(own.err, "compensate: ")) << own.err;
 
@@ -175,7 +175,7 @@ TEST_F(Envelope, CompensateIsQuietInsideTheEnvelopeAndSaysWhenNeverReady) {
   std::string head;
   for (std::size_t i = 0; i < 51 && i < lines.size(); ++i) head += lines[i] + "\n";
   dir_->write("short.csv", head);
-  const auto short_log = thermodrift(*dir_, "compensate --model full.json --data short.csv --out short_out.csv");
+  const auto short_log = run_thermodrift(*dir_, "compensate --model full.json --data short.csv --out short_out.csv");
   ASSERT_EQ(short_log.status, 0) << short_log.err;
   EXPECT_TRUE(contains(short_log.err, "gyro_x: never ready: all 50 rows")) << short_log.err;
 }

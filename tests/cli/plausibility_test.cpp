@@ -13,7 +13,7 @@
 namespace thermodrift::testing {
 namespace {
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
 // The simulated log with line `line` (1-based, the header is line 1) given `cell` in
 // column `column` (0-based).

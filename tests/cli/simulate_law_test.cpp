@@ -16,11 +16,11 @@ using testing::read_file;
 using testing::split_lines;
 using testing::TempDir;
 
-constexpr auto thermodrift = testing::run_thermodrift;
+using testing::run_thermodrift;
 
 TEST(SimulateLaw, WritesTheChamberRunColumns) {
   TempDir dir;
-  const auto result = thermodrift(dir, "simulate --law 5 --profile staircase --cycles 1 --out x.csv");
+  const auto result = run_thermodrift(dir, "simulate --law 5 --profile staircase --cycles 1 --out x.csv");
   ASSERT_EQ(result.status, 0) << result.err;
   const auto lines = split_lines(read_file(dir.file("x.csv")));
   ASSERT_GT(lines.size(), 3600u);
@@ -32,7 +32,7 @@ TEST(SimulateLaw, WritesTheChamberRunColumns) {
 
 TEST(SimulateLaw, DescribePrintsTheDrawnLawOnStderr) {
   TempDir dir;
-  const auto result = thermodrift(dir, "simulate --law 5 --profile wander --describe --out x.csv");
+  const auto result = run_thermodrift(dir, "simulate --law 5 --profile wander --describe --out x.csv");
   ASSERT_EQ(result.status, 0) << result.err;
   EXPECT_TRUE(result.err.starts_with("law 5: range")) << result.err;
   EXPECT_NE(result.err.find("  z: chain"), std::string::npos) << result.err;
@@ -40,7 +40,7 @@ TEST(SimulateLaw, DescribePrintsTheDrawnLawOnStderr) {
 
 TEST(SimulateLaw, AnUnknownProfileExitsTwoWithOneLine) {
   TempDir dir;
-  const auto result = thermodrift(dir, "simulate --law 5 --profile nonsense --out x.csv");
+  const auto result = run_thermodrift(dir, "simulate --law 5 --profile nonsense --out x.csv");
   EXPECT_EQ(result.status, 2);
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_TRUE(result.err.starts_with("thermodrift: ")) << result.err;

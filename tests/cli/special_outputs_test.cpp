@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../support/special_files.hpp"
+#include "../support/one_line_error.hpp"
 #include "../support/temp_dir.hpp"
 
 namespace thermodrift {
@@ -23,28 +24,23 @@ using testing::file_type;
 using testing::read_file;
 using testing::TempDir;
 
-const std::string kBinary = THERMODRIFT_BINARY;
-const std::string kTemps = " --temp temp_x,temp_y,temp_z";
+using testing::kBinary;
+using testing::kTemps;
 
-CommandResult thermodrift(const TempDir& dir, const std::string& arguments) {
-  return testing::run_in(dir, "'" + kBinary + "' " + arguments);
-}
+using testing::run_thermodrift;
 
-void expect_one_line(const CommandResult& result) {
-  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
-  EXPECT_TRUE(result.err.starts_with("thermodrift: ")) << result.err;
-}
+using testing::expect_one_line;
 
 // One simulated cycle, a linear model of it and its compensated log, made once.
 class SpecialOutputs : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     shared_ = std::make_unique<TempDir>();
-    auto result = thermodrift(*shared_, "simulate --cycles 1 --out sim.csv");
+    auto result = run_thermodrift(*shared_, "simulate --cycles 1 --out sim.csv");
     ASSERT_EQ(result.status, 0) << result.err;
-    result = thermodrift(*shared_, "fit --data sim.csv" + kTemps + " --model linear --out model.json");
+    result = run_thermodrift(*shared_, "fit --data sim.csv" + kTemps + " --model linear --out model.json");
     ASSERT_EQ(result.status, 0) << result.err;
-    result = thermodrift(*shared_, "compensate --model model.json --data sim.csv --out compensated.csv");
+    result = run_thermodrift(*shared_, "compensate --model model.json --data sim.csv --out compensated.csv");
     ASSERT_EQ(result.status, 0) << result.err;
     compensated_ = read_file(shared_->file("compensated.csv"));
   }
@@ -56,7 +52,7 @@ class SpecialOutputs : public ::testing::Test {
   }
 
   CommandResult compensate(const std::string& out) {
-    return thermodrift(dir_, "compensate --model model.json --data sim.csv --out " + out);
+    return run_thermodrift(dir_, "compensate --model model.json --data sim.csv --out " + out);
   }
 
   static std::unique_ptr<TempDir> shared_;
@@ -74,7 +70,7 @@ TEST_F(SpecialOutputs, ANullDeviceTakesTheOutputAndStaysADevice) {
   auto result = compensate("null");
   EXPECT_EQ(result.status, 0) << result.err;
   EXPECT_EQ(file_type(dir_.file("null")), S_IFCHR);
-  result = thermodrift(dir_, "export --model model.json --out null");
+  result = run_thermodrift(dir_, "export --model model.json --out null");
   EXPECT_EQ(result.status, 0) << result.err;
   EXPECT_EQ(file_type(dir_.file("null")), S_IFCHR);
   EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"model.json", "null", "sim.csv"}));
@@ -84,7 +80,7 @@ TEST_F(SpecialOutputs, AFullDeviceIsExit1WithOneLine) {
   if (const auto why = testing::make_memory_device(dir_.file("full"), testing::kFullMinor); !why.empty()) {
     GTEST_SKIP() << why;
   }
-  const auto result = thermodrift(dir_, "fit --data sim.csv" + kTemps + " --model linear --out full");
+  const auto result = run_thermodrift(dir_, "fit --data sim.csv" + kTemps + " --model linear --out full");
   EXPECT_EQ(result.status, 1) << result.err;
   expect_one_line(result);
   EXPECT_NE(result.err.find("No space left"), std::string::npos) << result.err;
@@ -192,7 +188,7 @@ TEST_F(SpecialOutputs, AnEmptyOutIsAUsageError) {
        {std::string("compensate --model model.json --data sim.csv --out ''"),
         "fit --data sim.csv" + kTemps + " --model linear --out ''", std::string("export --model model.json --out ''"),
         std::string("simulate --cycles 1 --out ''"), "report --data sim.csv" + kTemps + " --out ''"}) {
-    const auto result = thermodrift(dir_, command);
+    const auto result = run_thermodrift(dir_, command);
     EXPECT_EQ(result.status, 2) << command << ": " << result.err;
     expect_one_line(result);
     EXPECT_NE(result.err.find("empty"), std::string::npos) << result.err;
@@ -202,7 +198,7 @@ TEST_F(SpecialOutputs, AnEmptyOutIsAUsageError) {
 
 TEST_F(SpecialOutputs, ReportIntoSomethingNotAFolderIsAUsageError) {
   testing::make_fifo(dir_.file("pipe"));
-  const auto result = thermodrift(dir_, "report --data sim.csv" + kTemps + " --out pipe");
+  const auto result = run_thermodrift(dir_, "report --data sim.csv" + kTemps + " --out pipe");
   EXPECT_EQ(result.status, 2) << result.err;
   expect_one_line(result);
   EXPECT_NE(result.err.find("pipe is a FIFO"), std::string::npos) << result.err;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/one_line_error.hpp"
 #include "../support/temp_dir.hpp"
 
 namespace thermodrift {
@@ -23,29 +24,22 @@ using testing::read_file;
 using testing::split_lines;
 using testing::TempDir;
 
-const std::string kBinary = THERMODRIFT_BINARY;
+using testing::kBinary;
 constexpr double kCycleSeconds = 22800;  // one default chamber cycle
-const std::string kTemps = " --temp temp_x,temp_y,temp_z";
+using testing::kTemps;
 
-CommandResult thermodrift(const TempDir& dir, const std::string& arguments) {
-  return testing::run_in(dir, "'" + kBinary + "' " + arguments);
-}
+using testing::run_thermodrift;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
-// stderr of a failed command: exactly one line, starting "thermodrift: ".
-void expect_one_line(const CommandResult& result) {
-  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
-  EXPECT_TRUE(result.err.starts_with("thermodrift: ")) << result.err;
-  EXPECT_TRUE(result.err.ends_with("\n")) << result.err;
-}
+using testing::expect_one_line;
 
 // The simulated two-cycle run and its split into cycles, made once for every test here.
 class Workflow : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     shared_ = std::make_unique<TempDir>();
-    const auto result = thermodrift(*shared_, "simulate --cycles 2 --out sim.csv");
+    const auto result = run_thermodrift(*shared_, "simulate --cycles 2 --out sim.csv");
     ASSERT_EQ(result.status, 0) << result.err;
     const auto lines = split_lines(read_file(shared_->file("sim.csv")));
     ASSERT_GT(lines.size(), 2 * kCycleSeconds);
@@ -57,7 +51,8 @@ class Workflow : public ::testing::Test {
     }
     cycle1_ = shared_->write("cycle1.csv", first);
     cycle2_ = shared_->write("cycle2.csv", second);
-    const auto fit = thermodrift(*shared_, "fit --data cycle1.csv" + kTemps + " --model linear --out model.json --json");
+    const auto fit =
+        run_thermodrift(*shared_, "fit --data cycle1.csv" + kTemps + " --model linear --out model.json --json");
     ASSERT_EQ(fit.status, 0) << fit.err;
     fit_stdout_ = fit.out;
     model_ = shared_->file("model.json");
@@ -103,7 +98,7 @@ TEST_F(Workflow, FitJsonIsOneObjectWithThreeAxes) {
 }
 
 TEST_F(Workflow, EvaluateOnTheSecondCycleBeatsNoModel) {
-  const auto result = thermodrift(*shared_, "evaluate --model model.json --data cycle2.csv --json");
+  const auto result = run_thermodrift(*shared_, "evaluate --model model.json --data cycle2.csv --json");
   ASSERT_EQ(result.status, 0) << result.err;
   EXPECT_EQ(result.err, "");
   nlohmann::json json;
@@ -122,7 +117,7 @@ TEST_F(Workflow, EvaluateOnTheSecondCycleBeatsNoModel) {
 }
 
 TEST_F(Workflow, EvaluateWithoutJsonPrintsATable) {
-  const auto result = thermodrift(*shared_, "evaluate --model model.json --data cycle2.csv");
+  const auto result = run_thermodrift(*shared_, "evaluate --model model.json --data cycle2.csv");
   ASSERT_EQ(result.status, 0) << result.err;
   EXPECT_TRUE(contains(result.out, "gyro_x")) << result.out;
   EXPECT_FALSE(nlohmann::json::accept(result.out));  // a table, not JSON
@@ -131,7 +126,7 @@ TEST_F(Workflow, EvaluateWithoutJsonPrintsATable) {
 TEST_F(Workflow, CompensateWritesEveryRowPlusOneColumnPerAxis) {
   const auto input = copy(cycle2_, "in.csv");
   const auto model = copy(model_, "model.json");
-  const auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
+  const auto result = run_thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
   ASSERT_EQ(result.status, 0) << result.err;
   const auto in_lines = split_lines(read_file(input));
   const auto out_lines = split_lines(read_file(dir_.file("out.csv")));
@@ -177,7 +172,7 @@ TEST(CliErrors, BadCellIsExit3NamingFileLineAndColumn) {
   std::string text = small_log(50);
   text.replace(text.find("\n3,20,1\n") + 1, 6, "3,20,1x");  // line 5, column 3
   dir.write("bad.csv", text);
-  const auto result = thermodrift(dir, "fit --data bad.csv" + kSmallColumns + " --out model.json");
+  const auto result = run_thermodrift(dir, "fit --data bad.csv" + kSmallColumns + " --out model.json");
   EXPECT_EQ(result.status, 3) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "bad.csv:5:3: '1x' is not a number")) << result.err;
@@ -189,7 +184,7 @@ TEST(CliErrors, TimeBackwardsIsExit3NamingFileLineAndColumn) {
   std::string text = small_log(50);
   text.replace(text.find("\n7,20,1\n") + 1, 1, "2");  // line 9 says t = 2 after t = 6
   dir.write("back.csv", text);
-  const auto result = thermodrift(dir, "fit --data back.csv" + kSmallColumns + " --out model.json");
+  const auto result = run_thermodrift(dir, "fit --data back.csv" + kSmallColumns + " --out model.json");
   EXPECT_EQ(result.status, 3) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "back.csv:9:1: time goes backwards")) << result.err;
@@ -201,7 +196,7 @@ TEST(CliErrors, TimeRepeatedNaNAndMissingColumnAreExit3) {
   std::string repeated = small_log(30);
   repeated.replace(repeated.find("\n5,20,1\n") + 1, 1, "4");
   dir.write("repeat.csv", repeated);
-  auto result = thermodrift(dir, "fit --data repeat.csv" + kSmallColumns + " --out m.json");
+  auto result = run_thermodrift(dir, "fit --data repeat.csv" + kSmallColumns + " --out m.json");
   EXPECT_EQ(result.status, 3);
   EXPECT_TRUE(contains(result.err, "repeat.csv:7:1: ")) << result.err;
   expect_one_line(result);
@@ -209,13 +204,13 @@ TEST(CliErrors, TimeRepeatedNaNAndMissingColumnAreExit3) {
   std::string nan = small_log(30);
   nan.replace(nan.find("\n5,20,1\n") + 1, 6, "5,nan,1");
   dir.write("nan.csv", nan);
-  result = thermodrift(dir, "fit --data nan.csv" + kSmallColumns + " --out m.json");
+  result = run_thermodrift(dir, "fit --data nan.csv" + kSmallColumns + " --out m.json");
   EXPECT_EQ(result.status, 3);
   EXPECT_TRUE(contains(result.err, "nan.csv:7:2: 'nan' is not a finite number")) << result.err;
   expect_one_line(result);
 
   dir.write("ok.csv", small_log(30));
-  result = thermodrift(dir, "fit --data ok.csv --gyro gyro_q --temp temp --out m.json");
+  result = run_thermodrift(dir, "fit --data ok.csv --gyro gyro_q --temp temp --out m.json");
   EXPECT_EQ(result.status, 3);
   EXPECT_TRUE(contains(result.err, "ok.csv:1: no gyro column named 'gyro_q'")) << result.err;
   expect_one_line(result);
@@ -226,10 +221,10 @@ TEST(CliErrors, EmptyFileAndOnlyHeaderAreExit3) {
   TempDir dir;
   dir.write("empty.csv", "");
   dir.write("header.csv", kSmallHeader);
-  auto result = thermodrift(dir, "fit --data empty.csv" + kSmallColumns + " --out m.json");
+  auto result = run_thermodrift(dir, "fit --data empty.csv" + kSmallColumns + " --out m.json");
   EXPECT_EQ(result.status, 3);
   expect_one_line(result);
-  result = thermodrift(dir, "fit --data header.csv" + kSmallColumns + " --out m.json");
+  result = run_thermodrift(dir, "fit --data header.csv" + kSmallColumns + " --out m.json");
   EXPECT_EQ(result.status, 3);
   EXPECT_TRUE(contains(result.err, "header.csv:1: only a header")) << result.err;
   expect_one_line(result);
@@ -239,7 +234,7 @@ TEST(CliErrors, FewerRowsThanTheWarmUpIsExit3) {
   TempDir dir;
   dir.write("short.csv", small_log(50));  // 50 s of data, 100 s smoothing
   for (const std::string features : {"", " --model svr --features auto"}) {
-    const auto result = thermodrift(dir, "fit --data short.csv --gyro gyro_x --temp temp --out m.json" + features);
+    const auto result = run_thermodrift(dir, "fit --data short.csv --gyro gyro_x --temp temp --out m.json" + features);
     EXPECT_EQ(result.status, 3) << features << ": " << result.err;
     expect_one_line(result);
     EXPECT_TRUE(contains(result.err, "short.csv: too little data after the 200 s warm-up")) << result.err;
@@ -254,7 +249,7 @@ TEST(CliErrors, ConstantTemperatureFitsWithFiniteNumbers) {
   std::string text = kSmallHeader;
   for (int i = 0; i < 400; ++i) text += std::to_string(i) + ",20," + std::to_string(1 + (i % 5) * 0.01) + "\n";
   dir.write("flat.csv", text);
-  const auto fit = thermodrift(dir, "fit --data flat.csv" + kSmallColumns + " --model linear --out m.json --json");
+  const auto fit = run_thermodrift(dir, "fit --data flat.csv" + kSmallColumns + " --model linear --out m.json --json");
   ASSERT_EQ(fit.status, 0) << fit.err;
   const auto model = nlohmann::json::parse(read_file(dir.file("m.json")));
   const auto& linear = model.at("axes").at(0).at("model");
@@ -265,7 +260,7 @@ TEST(CliErrors, ConstantTemperatureFitsWithFiniteNumbers) {
     EXPECT_LT(std::abs(c.get<double>()), 10.0) << linear.dump();
   }
   EXPECT_LT(std::abs(linear.at("intercept").get<double>()), 10.0) << linear.dump();
-  const auto evaluate = thermodrift(dir, "evaluate --model m.json --data flat.csv --json");
+  const auto evaluate = run_thermodrift(dir, "evaluate --model m.json --data flat.csv --json");
   ASSERT_EQ(evaluate.status, 0) << evaluate.err;
   const auto json = nlohmann::json::parse(evaluate.out);
   EXPECT_TRUE(json.at("axes").at(0).at("mse_after").is_number()) << evaluate.out;  // NaN would be null
@@ -274,7 +269,7 @@ TEST(CliErrors, ConstantTemperatureFitsWithFiniteNumbers) {
 TEST(CliErrors, UnknownOptionIsExit2) {
   TempDir dir;
   dir.write("ok.csv", small_log(30));
-  const auto result = thermodrift(dir, "fit --data ok.csv" + kSmallColumns + " --out m.json --bogus 3");
+  const auto result = run_thermodrift(dir, "fit --data ok.csv" + kSmallColumns + " --out m.json --bogus 3");
   EXPECT_EQ(result.status, 2) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "--bogus")) << result.err;
@@ -285,27 +280,27 @@ TEST(CliErrors, UnknownOptionIsExit2) {
 TEST(CliErrors, MissingRequiredOptionIsExit2) {
   TempDir dir;
   dir.write("ok.csv", small_log(30));
-  auto result = thermodrift(dir, "fit --data ok.csv" + kSmallColumns);  // no --out
+  auto result = run_thermodrift(dir, "fit --data ok.csv" + kSmallColumns);  // no --out
   EXPECT_EQ(result.status, 2) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "--out")) << result.err;
 
-  result = thermodrift(dir, "evaluate --data ok.csv");  // no --model
+  result = run_thermodrift(dir, "evaluate --data ok.csv");  // no --model
   EXPECT_EQ(result.status, 2) << result.err;
   expect_one_line(result);
 
-  result = thermodrift(dir, "simulate");  // no --out
+  result = run_thermodrift(dir, "simulate");  // no --out
   EXPECT_EQ(result.status, 2) << result.err;
   expect_one_line(result);
 
-  result = thermodrift(dir, "");  // no subcommand
+  result = run_thermodrift(dir, "");  // no subcommand
   EXPECT_EQ(result.status, 2) << result.err;
 }
 
 TEST(CliErrors, BadOptionValueIsExit2) {
   TempDir dir;
   dir.write("ok.csv", small_log(30));
-  const auto result = thermodrift(dir, "fit --data ok.csv" + kSmallColumns + " --gyro-unit furlongs --out m.json");
+  const auto result = run_thermodrift(dir, "fit --data ok.csv" + kSmallColumns + " --gyro-unit furlongs --out m.json");
   EXPECT_EQ(result.status, 2) << result.err;
   expect_one_line(result);
 }
@@ -315,7 +310,7 @@ TEST_F(Workflow, FailedFitLeavesAnExistingModelUnchanged) {
   text.replace(text.find("\n3,20,1\n") + 1, 6, "3,20,?");
   dir_.write("bad.csv", text);
   dir_.write("model.json", "old model\n");
-  const auto result = thermodrift(dir_, "fit --data bad.csv" + kSmallColumns + " --out model.json");
+  const auto result = run_thermodrift(dir_, "fit --data bad.csv" + kSmallColumns + " --out model.json");
   EXPECT_EQ(result.status, 3) << result.err;
   EXPECT_EQ(read_file(dir_.file("model.json")), "old model\n");
   EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"bad.csv", "model.json"}));
@@ -331,7 +326,7 @@ TEST_F(Workflow, CompensateFailingMidStreamLeavesNoOutput) {
   for (const auto& line : lines) text += line + "\n";
   dir_.write("in.csv", text);
   copy(model_, "model.json");
-  auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
+  auto result = run_thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
   EXPECT_EQ(result.status, 3) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "in.csv:15001:1: time goes backwards")) << result.err;
@@ -339,7 +334,7 @@ TEST_F(Workflow, CompensateFailingMidStreamLeavesNoOutput) {
 
   // An earlier output stays as it was.
   dir_.write("out.csv", "earlier result\n");
-  result = thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
+  result = run_thermodrift(dir_, "compensate --model model.json --data in.csv --out out.csv");
   EXPECT_EQ(result.status, 3) << result.err;
   EXPECT_EQ(read_file(dir_.file("out.csv")), "earlier result\n");
   EXPECT_EQ(dir_.entries(), (std::vector<std::string>{"in.csv", "model.json", "out.csv"}));
@@ -350,16 +345,16 @@ TEST_F(Workflow, OutputThatIsTheInputIsRefused) {
   copy(model_, "model.json");
   const std::string before = read_file(input);
   for (const std::string& out : std::vector<std::string>{"in.csv", "./in.csv", dir_.file("in.csv")}) {
-    const auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out " + out);
+    const auto result = run_thermodrift(dir_, "compensate --model model.json --data in.csv --out " + out);
     EXPECT_EQ(result.status, 2) << out << ": " << result.err;
     expect_one_line(result);
     EXPECT_TRUE(contains(result.err, "one of the inputs")) << result.err;
   }
   // The model is an input of compensate too.
-  auto result = thermodrift(dir_, "compensate --model model.json --data in.csv --out model.json");
+  auto result = run_thermodrift(dir_, "compensate --model model.json --data in.csv --out model.json");
   EXPECT_EQ(result.status, 2) << result.err;
   // And the data is an input of fit.
-  result = thermodrift(dir_, "fit --data in.csv" + kTemps + " --model linear --out in.csv");
+  result = run_thermodrift(dir_, "fit --data in.csv" + kTemps + " --model linear --out in.csv");
   EXPECT_EQ(result.status, 2) << result.err;
   expect_one_line(result);
   EXPECT_EQ(read_file(input), before);
@@ -370,7 +365,7 @@ TEST_F(Workflow, ModelFileErrorsAreExit3) {
   copy(cycle2_, "in.csv");
   const std::string text = read_file(model_);
   dir_.write("cut.json", text.substr(0, text.size() / 2));
-  auto result = thermodrift(dir_, "evaluate --model cut.json --data in.csv --json");
+  auto result = run_thermodrift(dir_, "evaluate --model cut.json --data in.csv --json");
   EXPECT_EQ(result.status, 3) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "cut.json:")) << result.err;
@@ -380,12 +375,12 @@ TEST_F(Workflow, ModelFileErrorsAreExit3) {
   auto json = nlohmann::json::parse(text);
   json["version"] = 99;
   dir_.write("v99.json", json.dump());
-  result = thermodrift(dir_, "evaluate --model v99.json --data in.csv");
+  result = run_thermodrift(dir_, "evaluate --model v99.json --data in.csv");
   EXPECT_EQ(result.status, 3) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "version 99")) << result.err;
 
-  result = thermodrift(dir_, "compensate --model v99.json --data in.csv --out out.csv");
+  result = run_thermodrift(dir_, "compensate --model v99.json --data in.csv --out out.csv");
   EXPECT_EQ(result.status, 3) << result.err;
   EXPECT_FALSE(std::filesystem::exists(dir_.file("out.csv")));
 }
@@ -396,7 +391,7 @@ TEST_F(Workflow, ModelReadingColumnsTheDataLacksIsExit3) {
   text.replace(text.find("gyro_y"), 6, "rate_y");
   dir_.write("renamed.csv", text);
   copy(model_, "model.json");
-  const auto result = thermodrift(dir_, "evaluate --model model.json --data renamed.csv");
+  const auto result = run_thermodrift(dir_, "evaluate --model model.json --data renamed.csv");
   EXPECT_EQ(result.status, 3) << result.err;
   expect_one_line(result);
   EXPECT_TRUE(contains(result.err, "renamed.csv:1: no gyro column named 'gyro_y'")) << result.err;
@@ -407,14 +402,15 @@ TEST_F(Workflow, ModelReadingColumnsTheDataLacksIsExit3) {
 TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
   copy(cycle1_, "cycle1.csv");
   copy(cycle2_, "cycle2.csv");
-  const auto fit = thermodrift(dir_, "fit --data cycle1.csv --temp temp_x,temp_y,temp_z,temp_chamber --model linear "
-                                     "--features dT,lag:600,grad:1-4,gradrate:1-4 --out grad.json --json");
+  const auto fit = run_thermodrift(dir_,
+                                   "fit --data cycle1.csv --temp temp_x,temp_y,temp_z,temp_chamber --model linear "
+                                   "--features dT,lag:600,grad:1-4,gradrate:1-4 --out grad.json --json");
   ASSERT_EQ(fit.status, 0) << fit.err;
   const auto model = nlohmann::json::parse(read_file(dir_.file("grad.json")));
   EXPECT_EQ(model.at("extra_temperature_columns"), nlohmann::json::array({"temp_chamber"}));
   EXPECT_EQ(model["axes"][2]["temperature_column"], "temp_z");
 
-  const auto evaluated = thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --json");
+  const auto evaluated = run_thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --json");
   ASSERT_EQ(evaluated.status, 0) << evaluated.err;
   const auto all_axes = nlohmann::json::parse(evaluated.out)["axes"];
   for (const auto& axis : all_axes) {
@@ -423,7 +419,7 @@ TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
   // Its lag starts in equilibrium on a log begun mid-transient: evaluate says so, and
   // --settle leaves the first 1800 s out (1600 samples at 1 Hz after the 200 s warm-up).
   EXPECT_TRUE(contains(evaluated.err, "--settle 1800")) << evaluated.err;
-  const auto settled = thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --settle 1800 --json");
+  const auto settled = run_thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --settle 1800 --json");
   ASSERT_EQ(settled.status, 0) << settled.err;
   EXPECT_EQ(settled.err, "");
   const auto settled_json = nlohmann::json::parse(settled.out);
@@ -432,27 +428,27 @@ TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
     EXPECT_EQ(settled_json["axes"][a]["samples"].get<std::size_t>() + 1600, all_axes[a]["samples"].get<std::size_t>());
   }
   // A settle shorter than three times the lag: said too, with the settle that covers it.
-  const auto short_settle = thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --settle 600 --json");
+  const auto short_settle = run_thermodrift(dir_, "evaluate --model grad.json --data cycle2.csv --settle 600 --json");
   ASSERT_EQ(short_settle.status, 0) << short_settle.err;
   EXPECT_TRUE(contains(short_settle.err, "slowest lag (600 s)")) << short_settle.err;
   EXPECT_TRUE(contains(short_settle.err, "--settle 1800 leaves it out")) << short_settle.err;
   EXPECT_TRUE(contains(short_settle.err, "the whole recording with --settle up to the part to judge"))
       << short_settle.err;
-  const auto compensated = thermodrift(dir_, "compensate --model grad.json --data cycle2.csv --out out.csv");
+  const auto compensated = run_thermodrift(dir_, "compensate --model grad.json --data cycle2.csv --out out.csv");
   ASSERT_EQ(compensated.status, 0) << compensated.err;
   EXPECT_EQ(split_lines(read_file(dir_.file("out.csv"))).size(), split_lines(read_file(cycle2_)).size());
 
   // The axes' three columns only: the model's fourth is missing, said in one line.
-  const auto short_of_one = thermodrift(dir_, "compensate --model grad.json --data cycle2.csv" + kTemps +
-                                                  " --out short.csv");
+  const auto short_of_one = run_thermodrift(dir_, "compensate --model grad.json --data cycle2.csv" + kTemps +
+                                                      " --out short.csv");
   EXPECT_EQ(short_of_one.status, 2) << short_of_one.err;
   expect_one_line(short_of_one);
   EXPECT_TRUE(contains(short_of_one.err, "temp_chamber")) << short_of_one.err;
   EXPECT_FALSE(std::filesystem::exists(dir_.file("short.csv")));
 
   // A grad term reading a channel --temp does not give is a usage error.
-  const auto beyond = thermodrift(dir_, "fit --data cycle1.csv" + kTemps + " --model linear --features dT,grad:1-4 "
-                                                                            "--out beyond.json");
+  const auto beyond = run_thermodrift(dir_, "fit --data cycle1.csv" + kTemps + " --model linear --features dT,grad:1-4 "
+                                                                                "--out beyond.json");
   EXPECT_EQ(beyond.status, 2) << beyond.err;
   expect_one_line(beyond);
   EXPECT_TRUE(contains(beyond.err, "temperature channel 4")) << beyond.err;

@@ -59,6 +59,9 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// Whether `text` holds `part`.
+inline bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
 inline std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot read " + path);
@@ -112,10 +115,18 @@ inline CommandResult run_in(const TempDir& dir, const std::string& command) {
 }
 
 #ifdef THERMODRIFT_BINARY
+// The thermodrift binary under test.
+inline const std::string kBinary = THERMODRIFT_BINARY;
+
 // Runs the thermodrift binary under test with `arguments` in `dir`.
 inline CommandResult run_thermodrift(const TempDir& dir, const std::string& arguments) {
-  return run_in(dir, std::string("'") + THERMODRIFT_BINARY + "' " + arguments);
+  return run_in(dir, "'" + kBinary + "' " + arguments);
 }
 #endif
+
+// The column options of a simulated chamber log (`thermodrift simulate`): its three
+// thermometers, and its three gyro axes with them.
+inline const std::string kTemps = " --temp temp_x,temp_y,temp_z";
+inline const std::string kColumns = " --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z";
 
 }  // namespace thermodrift::testing

@@ -16,7 +16,7 @@ namespace {
 
 using testing::TempDir;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
 LogSpec named_spec() {
   LogSpec spec;

@@ -43,7 +43,7 @@ DataError read_error(const std::string& path, CsvOptions options = {}) {
   return DataError("", 0, 0, "");
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
 TEST(CsvReader, HeaderRowIsRecognisedAndNotData) {
   TempDir dir;

@@ -18,7 +18,7 @@ namespace {
 
 using testing::TempDir;
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using testing::contains;
 
 DriftModel two_axis_model() {
   DriftModel model;
