@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <map>
 #include <memory>
 #include <variant>
 
@@ -37,6 +38,8 @@ int run_compress(const CompressArguments& args) {
   const StopToken stop = interrupt_token();
   reduce.stop = stop;
   std::size_t svr_axes = 0;
+  // SVR axes with fewer than two support vectors: nothing to reduce, said per axis.
+  std::map<std::string, std::string> unchanged;
   for (auto& axis : compressed.axes) {
     auto* svr = std::get_if<SvrModel>(&axis.model);
     if (svr == nullptr) continue;
@@ -44,7 +47,13 @@ int run_compress(const CompressArguments& args) {
     // The support vectors are the training samples the model file still holds: the
     // reduced set is fitted at them (standardized units, as the function is).
     const Eigen::MatrixXd points = svr->function.support_vectors;
-    if (points.rows() < 2) continue;
+    if (points.rows() < 2) {
+      const bool left_out = axis.fit.kernel_check && !axis.fit.kernel_check->kept;
+      const char* plural = points.rows() == 1 ? "" : "s";
+      const char* why = left_out ? " (the kernel was left out: the axis is its linear part)" : "";
+      unchanged.emplace(axis.name, fmt::format("{} support vector{}, nothing to reduce{}", points.rows(), plural, why));
+      continue;
+    }
     axis.fit.compressed = compress(*svr, points, reduce);
   }
   if (svr_axes == 0) throw UsageError(fmt::format("{} has no SVR axis: nothing to compress", args.model_file));
@@ -72,6 +81,10 @@ int run_compress(const CompressArguments& args) {
 
   nlohmann::json axes = nlohmann::json::array();
   for (const auto& axis : compressed.axes) {
+    if (const auto why = unchanged.find(axis.name); why != unchanged.end()) {
+      axes.push_back({{"name", axis.name}, {"unchanged", why->second}});
+      if (!args.json) fmt::print("{}: {}\n", axis.name, why->second);
+    }
     if (!axis.fit.compressed) continue;
     const CompressionRecord& record = *axis.fit.compressed;
     axes.push_back({{"name", axis.name}, {"compressed", to_json(record)}});

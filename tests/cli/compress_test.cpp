@@ -7,7 +7,10 @@
 #include <filesystem>
 #include <string>
 
+#include "../support/fitted_model.hpp"
 #include "../support/temp_dir.hpp"
+#include "thermodrift/models/model_file.hpp"
+#include "thermodrift/sim/simulator.hpp"
 
 namespace thermodrift::testing {
 namespace {
@@ -68,6 +71,39 @@ TEST(Compress, FitMaxVectorsRecordsTheInSampleCost) {
     const auto& record = axis["compressed"];
     EXPECT_GT(record["training_mse_before"].get<double>(), 0);
     EXPECT_LT(record["training_mse_after"].get<double>(), 1.05 * record["training_mse_before"].get<double>());
+  }
+}
+
+// An SVR axis without support vectors (its kernel left out by fit's nested CV, or none
+// trained) has nothing to reduce: compress says so per axis, and still writes a model
+// the other commands take.
+TEST(Compress, SaysPerAxisWhenAnAxisHasNothingToReduce) {
+  TempDir dir;
+  sim::SimulatorOptions options;
+  options.cycles = 1;
+  options.rate_hz = 0.1;
+  const ChamberLog log = sim::to_chamber_log(sim::simulate(options));
+  DriftModel model = fitted_model(log, {.kind = "linear_part_only", .terms = {"lag:420", "lagrate:420", "rate"}});
+  model.axes[0].fit.kernel_check = KernelCheckRecord{.folds = 10, .with_kernel_mse = 2, .linear_part_mse = 1,
+                                                     .min_gain = 0.1, .kept = false};
+  save_drift_model(model, dir.file("none.json"), {});
+
+  const auto text = run_thermodrift(dir, "compress --model none.json --out small.json");
+  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_TRUE(contains(text.out, "gyro_x: 0 support vectors, nothing to reduce (the kernel was left out: the axis is "
+                                 "its linear part)\n"))
+      << text.out;
+  EXPECT_TRUE(contains(text.out, "gyro_y: 0 support vectors, nothing to reduce\n")) << text.out;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("small.json")));
+
+  const auto json = run_thermodrift(dir, "compress --model none.json --json --out small2.json");
+  ASSERT_EQ(json.status, 0) << json.err;
+  const auto printed = nlohmann::json::parse(json.out);
+  ASSERT_EQ(printed["axes"].size(), log.axes());
+  for (std::size_t a = 0; a < log.axes(); ++a) {
+    EXPECT_EQ(printed["axes"][a]["name"], log.gyro_names[a]);
+    EXPECT_TRUE(printed["axes"][a].contains("unchanged")) << printed["axes"][a];
+    EXPECT_FALSE(printed["axes"][a].contains("compressed")) << printed["axes"][a];
   }
 }
 
