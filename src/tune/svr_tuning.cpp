@@ -187,18 +187,6 @@ optim::Afsa::Options afsa_for_budget(long budget, int dimensions) {
 // ---------------------------------------------------------------------------------------
 // The objective.
 
-namespace {
-
-// One fit and what it is scored on.
-struct Split {
-  SvrDataset training;
-  Eigen::VectorXd training_targets;
-  Eigen::MatrixXd scoring_samples;  // empty: score on the training samples (train objective)
-  Eigen::VectorXd scoring_targets;
-};
-
-}  // namespace
-
 Eigen::MatrixXd rows_except(const Eigen::MatrixXd& matrix, SampleRange block) {
   Eigen::MatrixXd out(matrix.rows() - block.size(), matrix.cols());
   out.topRows(block.begin) = matrix.topRows(block.begin);
@@ -214,6 +202,13 @@ Eigen::VectorXd rows_except(const Eigen::VectorXd& vector, SampleRange block) {
 }
 
 struct SvrObjective::State {
+  // One fit and what it is scored on.
+  struct Split {
+    SvrDataset training;
+    Eigen::VectorXd training_targets;
+    Eigen::MatrixXd scoring_samples;  // empty: score on the training samples (train objective)
+    Eigen::VectorXd scoring_targets;
+  };
   std::vector<Split> splits;
   SvrOptions search;  // solver settings of every search fit; C, gamma, epsilon set per point
   mutable std::atomic<long> fits{0};
@@ -264,7 +259,7 @@ SvrObjective::SvrObjective(const Eigen::MatrixXd& samples, const Eigen::VectorXd
   const double per_subset_budget = distance_mb <= options.distance_budget_mb ? 1e300 : 0.0;
 
   for (const auto& block : held_out) {
-    Split split{SvrDataset(rows_except(samples, block), per_subset_budget), rows_except(targets, block), {}, {}};
+    State::Split split{SvrDataset(rows_except(samples, block), per_subset_budget), rows_except(targets, block), {}, {}};
     if (block.size() > 0) {
       split.scoring_samples = samples.middleRows(block.begin, block.size());
       split.scoring_targets = targets.segment(block.begin, block.size());
