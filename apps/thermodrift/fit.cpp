@@ -48,7 +48,7 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
     // Never silently ignored: the SVR's and its tuning's options with another model.
     for (const char* option : {"--C", "--sigma", "--gamma", "--epsilon", "--tol", "--tune", "--objective",
                                "--evaluations", "--folds", "--tune-epsilon", "--max-vectors", "--kernel",
-                               "--landmarks"}) {
+                               "--landmarks", "--keep-kernel"}) {
       if (app.count(option)) throw UsageError(fmt::format("{} applies to --model svr, not {}", option, args.model));
     }
   } else {
@@ -58,6 +58,10 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
   check_identify(app, args.features);
   if (app.count("--folds-by") && !auto_features && !tuned) {
     throw UsageError("--folds-by applies to the cross-validation of --features auto and of the SVR's tuning");
+  }
+  const bool identifies = auto_features && args.identify == FeatureSelectionOptions::Method::thermal_node;
+  if (app.count("--keep-kernel") && !(tuned && identifies)) {
+    throw UsageError("--keep-kernel applies to a tuned SVR on --features auto with the thermal-node identification");
   }
   for (const char* option : {"--node-channel", "--log-start"}) {
     if (app.count(option) && !(auto_features && args.identify == FeatureSelectionOptions::Method::thermal_node)) {
@@ -86,6 +90,7 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
   request.evaluations = args.evaluations;
   request.folds = args.folds;
   request.tune_epsilon = args.tune_epsilon;
+  request.keep_kernel = args.keep_kernel;
   if (app.count("--max-vectors")) request.max_vectors = args.max_vectors;
   request.approximation = svr_approximation_from_string(args.kernel);
   request.landmarks = args.landmarks;
@@ -255,6 +260,10 @@ void add_fit_options(CLI::App& app, FitArguments& args, bool data_required) {
                   "file: leave-one-run-out)")
       ->check(CLI::IsMember({"runs", "time"}));
   app.add_flag("--tune-epsilon", args.tune_epsilon, "tune ε as well");
+  app.add_flag("--keep-kernel", args.keep_kernel,
+               "with --model svr --features auto: keep the tuned kernel on the linear part's residual without "
+               "judging it (by default a nested CV leaves it out unless it cuts the linear part's CV MSE by 10 %; "
+               "docs/features.md)");
   app.add_option("--max-vectors", args.max_vectors,
                   "at most K support vectors per axis: the reduced set fitted to the SVR (as compress does)")
       ->check(whole_number(1, std::size_t{1} << 20));

@@ -38,6 +38,7 @@ struct FitArguments {
   int folds = 5;
   std::string folds_by = "time";
   bool tune_epsilon = false;
+  bool keep_kernel = false;
   std::size_t max_vectors = 0;
   std::string kernel = "auto";
   std::size_t landmarks = SvrOptions{}.landmarks;

@@ -306,6 +306,7 @@ CalibrationOptions calibration_options(const FitRequest& request) {
   options.svr.approximation = request.approximation;
   options.svr.landmarks = request.landmarks;
   options.max_vectors = request.max_vectors;
+  options.keep_kernel = request.keep_kernel;
   if (!request.C) {
     SvrTuningOptions tuning;
     tuning.method = parse_tune_method(request.tune.value_or("afsa"));
@@ -443,7 +444,8 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       record.epsilon = tuning.epsilon;
       for (const auto& point : tuned.history) record.history.push_back({point.evaluations, in_dph2(point.best_value)});
       fitted.fit.tuning = std::move(record);
-      if (options.partially_linear && identified && identified->held_out.blocks.size() >= 2) {
+      const bool judged = options.partially_linear && !options.keep_kernel;
+      if (judged && identified && identified->held_out.blocks.size() >= 2) {
         KernelCheckRecord check = check_kernel(features, target, terms, *identified, svr.scaling, solver);
         check.with_kernel_mse = in_dph2(check.with_kernel_mse);
         check.linear_part_mse = in_dph2(check.linear_part_mse);
@@ -637,7 +639,8 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
                                                axis_options.tuning->folds, options.folds_by);
       if (held_out.by == FoldsBy::runs) axis_options.tuning->blocks = held_out.blocks;
     }
-    if (axis_options.partially_linear && options.model == ModelKind::svr) {  // the blocks of its kernel check
+    // The blocks of the kernel check.
+    if (axis_options.partially_linear && options.model == ModelKind::svr && !options.keep_kernel) {
       identified.held_out = cv_blocks(training.features.rows(), training.run_start, options.selection.folds,
                                       options.folds_by);
     }

@@ -111,6 +111,10 @@ TEST(OptionChecks, OptionsThatWouldBeDroppedAreUsageErrors) {
            {"--model svr --C 10 --sigma 1 --tune-epsilon", "--tune-epsilon applies when C and σ are tuned"},
            {"--model svr --epsilon 0.3 --tune-epsilon", "--epsilon with --tune-epsilon"},
            {"--model linear --identify greedy", "--identify applies to --features auto"},
+           {"--model linear --features auto --keep-kernel", "--keep-kernel applies to --model svr, not linear"},
+           {"--model svr --keep-kernel", "--keep-kernel applies to a tuned SVR on --features auto"},
+           {"--model svr --C 10 --sigma 1 --features auto --keep-kernel", "--keep-kernel applies to a tuned SVR"},
+           {"--model svr --features auto --identify greedy --keep-kernel", "--keep-kernel applies to a tuned SVR"},
            {"--model linear --folds-by runs", "--folds-by applies to the cross-validation of --features auto"},
            {"--model linear --features dT,lag:600 --identify thermal-node", "--identify applies to --features auto"},
            {"--model linear --time time_s --rate 2", "--time and --rate: give one"}}) {

@@ -53,6 +53,10 @@ struct CalibrationOptions {
   // squares and products it adds to other terms (products of hinges extrapolate as
   // parabolas: z of the demo went from 1.6x to 27x the floor held out with them).
   bool partially_linear = false;
+  // A partially linear SVR's kernel is judged after tuning by nested CV and left out when
+  // it does not cut the linear part's CV MSE by selection.min_gain (fit_model); true keeps
+  // it without the check, as the paper's SVR would.
+  bool keep_kernel = false;
   // A line of progress of axis `axis` outside tuning (feature selection); may be empty.
   std::function<void(std::size_t axis, const std::string&)> selection_progress;
 };
@@ -86,6 +90,7 @@ struct FitRequest {
   long evaluations = 49;
   int folds = 5;
   bool tune_epsilon = false;
+  bool keep_kernel = false;  // CalibrationOptions::keep_kernel
   std::optional<std::size_t> max_vectors;
   SvrApproximation approximation = SvrApproximation::automatic;  // the kernel: exact, Nyström, or by size
   std::size_t landmarks = SvrOptions{}.landmarks;

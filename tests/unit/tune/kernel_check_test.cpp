@@ -92,6 +92,24 @@ TEST(KernelCheck, ALinearDriftWithWhiteNoiseLeavesTheKernelOut) {
   EXPECT_NE(expected->from.find("left out"), std::string::npos) << expected->from;
 }
 
+// keep_kernel (fit --keep-kernel): the same data as above, the kernel trained without the
+// check, and the tuning's CV quoted as the expected held-out figure.
+TEST(KernelCheck, KeepKernelTrainsTheKernelWithoutTheCheck) {
+  const Data data = make_data(1200, 0.0, 1);
+  const IdentifiedLinearPart identified = blocks_of(data);
+  CalibrationOptions options = svr_options();
+  options.keep_kernel = true;
+  const FittedModel fitted = fit_model(data.features, data.target, {"a", "b"}, options, true, 0, &identified);
+  EXPECT_FALSE(fitted.fit.kernel_check.has_value());
+  EXPECT_GT(std::get<SvrModel>(fitted.model).function.support_vectors.rows(), 0);
+  ASSERT_TRUE(fitted.fit.solver.has_value());
+  EXPECT_NE(fitted.fit.solver->termination, "not trained: kernel left out");
+  const auto expected = expected_held_out(fitted.fit);
+  ASSERT_TRUE(expected.has_value());
+  ASSERT_TRUE(fitted.fit.tuning.has_value());
+  EXPECT_EQ(expected->cv_mse, fitted.fit.tuning->objective_mse);
+}
+
 TEST(KernelCheck, AShapeEveryBlockRepeatsKeepsTheKernel) {
   const Data data = make_data(1200, 0.8, 2);
   const IdentifiedLinearPart identified = blocks_of(data);
