@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace thermodrift {
@@ -69,7 +70,11 @@ std::optional<BurstSummary> find_bursts(const ChamberLog& log, double warm_up_se
   return summary;
 }
 
-ChamberLog collapse_bursts(const ChamberLog& log, const BurstSummary& bursts) {
+namespace {
+
+// The log with each group of rows [begin, end) replaced by one row: the mean time, gyro
+// and temperature of its rows, the file line of its first row.
+ChamberLog means_of_groups(const ChamberLog& log, const std::vector<std::pair<std::size_t, std::size_t>>& groups) {
   ChamberLog out;
   out.source = log.source;
   out.time_origin = log.time_origin;
@@ -85,7 +90,7 @@ ChamberLog collapse_bursts(const ChamberLog& log, const BurstSummary& bursts) {
     for (std::size_t i = begin; i < end; ++i) sum += values[i];
     return sum / static_cast<double>(end - begin);
   };
-  for (const auto& [begin, end] : runs_of_rows(log, join_seconds(log))) {
+  for (const auto& [begin, end] : groups) {
     out.time.push_back(mean(log.time, begin, end));
     for (std::size_t a = 0; a < log.gyro.size(); ++a) out.gyro[a].push_back(mean(log.gyro[a], begin, end));
     for (std::size_t c = 0; c < log.temperature.size(); ++c) {
@@ -93,8 +98,30 @@ ChamberLog collapse_bursts(const ChamberLog& log, const BurstSummary& bursts) {
     }
     out.line.push_back(log.line[begin]);
   }
+  out.bursts = log.bursts;
+  return out;
+}
+
+}  // namespace
+
+ChamberLog collapse_bursts(const ChamberLog& log, const BurstSummary& bursts) {
+  ChamberLog out = means_of_groups(log, runs_of_rows(log, join_seconds(log)));
   out.bursts = bursts;
   return out;
+}
+
+ChamberLog binned(const ChamberLog& log, double seconds) {
+  std::vector<std::pair<std::size_t, std::size_t>> groups;
+  if (log.rows() == 0) return log;
+  const double start = log.time.front();
+  for (std::size_t begin = 0; begin < log.rows();) {
+    const double bin = std::floor((log.time[begin] - start) / seconds);
+    std::size_t end = begin + 1;
+    while (end < log.rows() && std::floor((log.time[end] - start) / seconds) == bin) ++end;
+    groups.emplace_back(begin, end);
+    begin = end;
+  }
+  return means_of_groups(log, groups);
 }
 
 ChamberLog collapse_if_bursts(ChamberLog log, double warm_up_seconds) {

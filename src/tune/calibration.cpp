@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/bursts.hpp"
 #include "thermodrift/models/linear.hpp"
 #include "thermodrift/models/svr_model.hpp"
 #include "tune/term_columns.hpp"
@@ -168,8 +169,38 @@ FeatureTable settled_rows(const FeatureTable& table, double settle_seconds) {
   return out;
 }
 
+// The logs the feature search reads: each sampled faster than every (smoothing window or
+// rate span, the shorter) / 100 seconds averaged in bins of that width (io/bursts.hpp's
+// binned), the others as they are. The search's candidate columns are filters run over
+// every row (95 % of the CPU of a 10 Hz log's fit), and what the smoothing leaves of the
+// signal does not change within a bin. The fit of the chosen terms reads every row.
+std::vector<ChamberLog> logs_for_search(const std::vector<ChamberLog>& logs, const Pipeline& pipeline) {
+  const double bin = std::min(pipeline.smooth_seconds, pipeline.rate_span_seconds) / 100;
+  std::vector<ChamberLog> out;
+  out.reserve(logs.size());
+  for (const auto& log : logs) out.push_back(median_sample_interval(log) < 0.5 * bin ? binned(log, bin) : log);
+  return out;
+}
+
+// The pipeline of the search on `search_logs`: `full`'s (its reference temperature
+// included), decimated to the same interval in time as `full` on `logs`.
+Pipeline search_pipeline(const Pipeline& full, const std::vector<ChamberLog>& logs,
+                         const std::vector<ChamberLog>& search_logs, const CalibrationOptions& options) {
+  Pipeline pipeline = full;
+  const double interval = median_sample_interval(logs.front());
+  const double search_interval = median_sample_interval(search_logs.front());
+  if (search_interval == interval) return pipeline;
+  pipeline.decimation = options.decimation
+                            ? std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(
+                                                           static_cast<double>(*options.decimation) * interval /
+                                                           search_interval)))
+                            : default_decimation(options.smooth_seconds, search_interval);
+  return pipeline;
+}
+
 // The least-squares search of one axis, after the same check of the data a fit makes
-// (too short a log says so in terms of the warm-up, not of folds).
+// (too short a log says so in terms of the warm-up, not of folds). `logs` are
+// logs_for_search's, `pipeline` search_pipeline's.
 FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline,
                                  const CalibrationOptions& calibration) {
   FeatureSelectionOptions options = calibration.selection;  // its own folds, not the tuning's
@@ -211,8 +242,10 @@ std::vector<FeatureSelection> select_features_per_axis(const std::vector<Chamber
                                                        const CalibrationOptions& options) {
   if (logs.empty()) throw UsageError("no log to choose features on");
   std::vector<FeatureSelection> selections(logs.front().axes());
+  const std::vector<ChamberLog> search_logs = logs_for_search(logs, make_pipeline(logs, 0, options));
   for_each_axis(selections.size(), options.selection.threads, [&](std::size_t axis) {
-    selections[axis] = search_features(logs, axis, make_pipeline(logs, axis, options), options);
+    const Pipeline pipeline = search_pipeline(make_pipeline(logs, axis, options), logs, search_logs, options);
+    selections[axis] = search_features(search_logs, axis, pipeline, options);
   });
   return selections;
 }
@@ -583,6 +616,10 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
   const auto channels = temperature_channel_per_axis(first);
 
   const std::vector<FeatureSelection>& searched = options.selections;  // given ones, if any
+  std::vector<ChamberLog> search_logs;
+  if (chooses_features(options) && searched.size() < first.axes()) {
+    search_logs = logs_for_search(logs, make_pipeline(logs, 0, options));
+  }
   // Each axis' terms, fit and tuning, the axes in parallel like the searches: one axis'
   // SVR tuning runs while another's search or tuning still does. Each axis' result does
   // not depend on the thread count; they are put in order.
@@ -605,7 +642,11 @@ Calibration calibrate(const std::vector<ChamberLog>& logs, const LogSpec& spec,
     IdentifiedLinearPart identified;
     if (chooses_features(options)) {
       const FeatureSelectionOptions& selection_options = options.selection;
-      FeatureSelection selection = axis < searched.size() ? searched[axis] : search_features(logs, axis, axis_model.pipeline, options);
+      FeatureSelection selection =
+          axis < searched.size()
+              ? searched[axis]
+              : search_features(search_logs, axis, search_pipeline(axis_model.pipeline, logs, search_logs, options),
+                                options);
       if (options.model == ModelKind::svr && selection_options.method == FeatureSelectionOptions::Method::greedy) {
         if (options.selection_progress) options.selection_progress(axis, "judging the chosen terms by SVR");
         SvrJudgeOptions judge;

@@ -26,4 +26,9 @@ ChamberLog collapse_bursts(const ChamberLog& log, const BurstSummary& bursts);
 // The bursts of `log` collapsed when it is a burst log (find_bursts), else `log` as it is.
 ChamberLog collapse_if_bursts(ChamberLog log, double warm_up_seconds);
 
+// The log with its rows averaged in bins of `seconds` from its first row's time: one row
+// per bin that holds any, its mean time, gyro and temperature and its first row's line.
+// A gap stays a gap. The feature search reads a fast log this way (tune/calibration.cpp).
+ChamberLog binned(const ChamberLog& log, double seconds);
+
 }  // namespace thermodrift

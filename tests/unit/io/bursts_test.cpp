@@ -50,6 +50,28 @@ TEST(Bursts, FiveSecondsAtFiftyHertzEveryFiveMinutes) {
   EXPECT_FALSE(find_bursts(means, 200)) << "collapsed twice";
 }
 
+// binned: the rows of each bin of `seconds` (from the first row's time) become their mean;
+// a gap leaves no row, so the step across it stays a gap. Times are binary fractions, so
+// every row falls in its bin exactly.
+TEST(Bursts, BinnedAveragesEachBinAndKeepsGaps) {
+  ChamberLog log = burst_log(1, 800, 0.125, 0);  // 100 s at 8 Hz: t = 0, 0.125, ..., 99.875
+  for (std::size_t i = 480; i < log.rows(); ++i) log.time[i] += 50.0625;  // a 50 s dropout after t = 59.875
+  const ChamberLog bins = binned(log, 1.0);
+  ASSERT_EQ(bins.rows(), 100u);
+  EXPECT_FALSE(bins.bursts);
+  for (std::size_t b = 0; b < bins.rows(); ++b) {
+    const double gyro = static_cast<double>(b) + 0.4375;  // the mean of b, b + 0.125, ..., b + 0.875
+    const double shift = b < 60 ? 0 : 50.0625;
+    EXPECT_NEAR(bins.time[b], gyro + shift, 1e-9) << b;
+    EXPECT_NEAR(bins.gyro[0][b], gyro, 1e-9) << b;
+    EXPECT_NEAR(bins.temperature[0][b], 2 * gyro, 1e-9) << b;
+    EXPECT_EQ(bins.line[b], 2 + 8 * b);
+  }
+  EXPECT_NEAR(bins.time[60] - bins.time[59], 51.0625, 1e-9);
+  // Bins narrower than the steps between rows change nothing.
+  EXPECT_EQ(binned(log, 0.0625).rows(), log.rows());
+}
+
 TEST(Bursts, OrdinaryLogsAreLeftAsTheyAre) {
   // A 1 Hz log with two 30 s dropouts: its stretches are hours long, each warms up by itself.
   ChamberLog dropouts = burst_log(1, 20000, 1, 0);
