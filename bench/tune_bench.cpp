@@ -32,6 +32,7 @@
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/models/svr_model.hpp"
 #include "thermodrift/sim/simulator.hpp"
+#include "thermodrift/tune/calibration.hpp"
 #include "thermodrift/tune/svr_tuning.hpp"
 
 using namespace thermodrift;
@@ -58,6 +59,7 @@ struct Arguments {
   bool low_rank = true;              // --kernel auto (the default) or exact: SMO for every fit
   std::size_t low_rank_landmarks = 0;  // 0: the library default
   std::vector<std::pair<double, double>> points;  // --points C:sigma,...: the search's fits judged instead
+  bool identified = false;  // --features auto: tune on the identified terms, as fit --model svr --features auto
 };
 
 Arguments parse(int argc, char** argv) {
@@ -79,6 +81,14 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--search-tolerance") args.search_tolerance = std::stod(value());
     else if (flag == "--search-max-iterations") args.search_max_iterations = std::stol(value());
     else if (flag == "--kernel") args.low_rank = value() != "exact";
+    else if (flag == "--features") {
+      const std::string features = value();
+      if (features != "auto" && features != "paper") {
+        fmt::print(stderr, "--features takes auto or paper, not {}\n", features);
+        std::exit(2);
+      }
+      args.identified = features == "auto";
+    }
     else if (flag == "--low-rank-landmarks") args.low_rank_landmarks = std::stoul(value());
     else if (flag == "--points") {
       const std::string list = value();
@@ -146,6 +156,31 @@ AxisData axis_data(const ChamberLog& training, const ChamberLog& held_out, std::
   return data;
 }
 
+// As `fit --model svr --features auto` tunes: the terms the least-squares search chose on
+// cycle 1 (tens of them: members averaged), the kernel's target the residual of their
+// linear fit (the partially linear SVR), held out on cycle 2 the same way.
+std::vector<AxisData> identified_axis_data(const ChamberLog& training, const ChamberLog& held_out) {
+  CalibrationOptions options;
+  options.terms = {"auto"};
+  const Calibration linear = calibrate({training}, LogSpec{}, options);
+  std::vector<AxisData> axes;
+  for (std::size_t axis = 0; axis < linear.model.axes.size(); ++axis) {
+    const AxisModel& model = linear.model.axes[axis];
+    auto table_of = [&](const ChamberLog& log, bool training_rows) {
+      FeatureTable table = build_feature_table(model.pipeline, log, axis, temperature_channel_per_axis(log).at(axis),
+                                               training_rows);
+      table.target -= model.predict(table.features);
+      return table;
+    };
+    AxisData data;
+    data.training = table_of(training, true);
+    data.held_out = table_of(held_out, false);
+    data.scaling = Standardization::of(data.training.features, data.training.target);
+    axes.push_back(std::move(data));
+  }
+  return axes;
+}
+
 struct Row {
   double objective_dph2 = 0;
   double held_out_mse = 0;
@@ -159,8 +194,10 @@ struct Row {
   double converged_dph2 = 0;  // the CV objective at the tuned point with every fit converged
 };
 
-Row run_method(const AxisData& data, TuneMethod method, const Arguments& args, bool low_rank) {
+Row run_method(const AxisData& data, TuneMethod method, const Arguments& args, bool low_rank,
+               bool store_distances = true) {
   SvrTuningOptions options;
+  if (!store_distances) options.distance_budget_mb = 0;
   options.method = method;
   options.objective = args.objective;
   options.evaluations = method == TuneMethod::grid ? args.grid_evaluations : args.evaluations;
@@ -215,11 +252,20 @@ int main(int argc, char** argv) {
   const auto floor = run.noise_floor(100);
 
   std::vector<AxisData> axes;
-  for (std::size_t a = 0; a < 3; ++a) axes.push_back(axis_data(training, held_out, a));
+  if (args.identified) {
+    axes = identified_axis_data(training, held_out);
+  } else {
+    for (std::size_t a = 0; a < 3; ++a) axes.push_back(axis_data(training, held_out, a));
+  }
   fmt::print("tune_bench: simulated 2-cycle chamber test, train cycle 1 ({} / {} / {} samples), "
              "held out cycle 2; objective {}, {} threads\n",
              axes[0].training.rows(), axes[1].training.rows(), axes[2].training.rows(), to_string(args.objective),
              args.threads);
+  if (args.identified) {
+    fmt::print("features: the terms --features auto identified on cycle 1 ({} / {} / {}), the target their linear "
+               "fit's residual\n",
+               axes[0].training.features.cols(), axes[1].training.features.cols(), axes[2].training.features.cols());
+  }
   fmt::print("noise floor after 100 s smoothing, (°/h)²: x {:.3g}  y {:.3g}  z {:.3g}\n\n", floor[0], floor[1],
              floor[2]);
   fmt::print("{:<18} {:<4} {:>10} {:>9} {:>12} {:>12} {:>12} {:>6} {:>6} {:>7} {:>8} {:>8} {:>8}\n", "method", "axis", "C",
@@ -264,18 +310,40 @@ int main(int argc, char** argv) {
     return 0;
   }
   // Each method as asked; AFSA once more with every fit by SMO (`--kernel exact`, the state before
-  // the low-rank fits, docs/tuning.md) for the ratio, in the same run.
-  std::vector<std::pair<TuneMethod, bool>> runs;
-  for (const TuneMethod method : args.methods) runs.emplace_back(method, args.low_rank);
+  // the low-rank fits, docs/tuning.md) for the ratio, in the same run; with more terms than
+  // SvrTuningOptions::kDistanceFeatures, AFSA once more with every distance computed per
+  // column (distance_budget_mb = 0, the state before stored distances).
+  struct Run {
+    TuneMethod method;
+    bool low_rank;
+    bool store_distances;
+  };
+  std::vector<Run> runs;
+  for (const TuneMethod method : args.methods) runs.push_back({method, args.low_rank, true});
+  bool wide = false;
+  for (const auto& axis : axes) wide = wide || axis.training.features.cols() > SvrTuningOptions::kDistanceFeatures;
   for (const TuneMethod method : args.methods) {
-    if (method == TuneMethod::afsa && args.low_rank) runs.emplace_back(method, false);
+    if (method == TuneMethod::afsa && args.low_rank) runs.push_back({method, false, true});
+    if (method == TuneMethod::afsa && wide) runs.push_back({method, args.low_rank, false});
   }
   double afsa_cpu[2] = {0, 0}, afsa_wall[2] = {0, 0};
-  for (const auto& [method, low_rank] : runs) {
-    const std::string label = fmt::format("{}{}", to_string(method), low_rank ? "" : " (SMO only)");
+  double computed_cpu = 0, computed_wall = 0, stored_cpu = 0, stored_wall = 0;
+  std::vector<Row> stored_rows;
+  bool same_points = true;
+  for (const auto& [method, low_rank, store_distances] : runs) {
+    const std::string label = fmt::format("{}{}{}", to_string(method), low_rank ? "" : " (SMO only)",
+                                          store_distances ? "" : " (d² computed)");
     Row total;
     for (std::size_t a = 0; a < axes.size(); ++a) {
-      const Row row = run_method(axes[a], method, args, low_rank);
+      const Row row = run_method(axes[a], method, args, low_rank, store_distances);
+      if (method == TuneMethod::afsa && low_rank == args.low_rank) {
+        if (store_distances) {
+          stored_rows.push_back(row);
+        } else {
+          same_points = same_points && row.C == stored_rows.at(a).C && row.sigma == stored_rows.at(a).sigma &&
+                        row.objective_dph2 == stored_rows.at(a).objective_dph2;
+        }
+      }
       fmt::print("{:<18} {:<4} {:>10.4g} {:>9.4g} {:>12.4g} {:>12.4g} {:>12.4g} {:>6} {:>6} {:>7} {:>8} {:>8.2f} {:>8.2f}\n",
                  label, names[a], row.C, row.sigma, row.objective_dph2, row.converged_dph2, row.held_out_mse,
                  row.evaluations, row.fits, row.capped, row.low_rank, row.seconds, row.cpu_seconds);
@@ -292,9 +360,16 @@ int main(int argc, char** argv) {
     fmt::print("{:<18} {:<4} {:>10} {:>9} {:>12.4g} {:>12.4g} {:>12.4g} {:>6} {:>6} {:>7} {:>8} {:>8.2f} {:>8.2f}\n\n",
                label, "all", "", "", total.objective_dph2, total.converged_dph2, total.held_out_mse,
                total.evaluations, total.fits, total.capped, total.low_rank, total.seconds, total.cpu_seconds);
-    if (method == TuneMethod::afsa) {
+    if (method == TuneMethod::afsa && !store_distances) {
+      computed_cpu = total.cpu_seconds;
+      computed_wall = total.seconds;
+    } else if (method == TuneMethod::afsa) {
       afsa_cpu[low_rank ? 1 : 0] = total.cpu_seconds;
       afsa_wall[low_rank ? 1 : 0] = total.seconds;
+      if (low_rank == args.low_rank) {
+        stored_cpu = total.cpu_seconds;
+        stored_wall = total.seconds;
+      }
     }
     std::fflush(stdout);
   }
@@ -303,6 +378,12 @@ int main(int argc, char** argv) {
                "{:.2f}x less wall time ({:.2f} → {:.2f} s)\n",
                afsa_cpu[0] / afsa_cpu[1], afsa_cpu[0], afsa_cpu[1], afsa_wall[0] / afsa_wall[1], afsa_wall[0],
                afsa_wall[1]);
+  }
+  if (computed_cpu > 0 && stored_cpu > 0) {
+    fmt::print("afsa, stored squared distances against computed per column: {:.2f}x less CPU ({:.2f} → {:.2f} s), "
+               "{:.2f}x less wall time ({:.2f} → {:.2f} s); tuned C, σ and CV MSE {}\n",
+               computed_cpu / stored_cpu, computed_cpu, stored_cpu, computed_wall / stored_wall, computed_wall,
+               stored_wall, same_points ? "identical" : "DIFFERENT");
   }
   return 0;
 }

@@ -136,11 +136,21 @@ SvrDataset::SvrDataset(Eigen::MatrixXd samples, double distance_budget_mb) : sam
   const double n = static_cast<double>(samples_.rows());
   if (distance_budget_mb > 0 && n * n * sizeof(double) <= distance_budget_mb * 1024.0 * 1024.0) {
     const Eigen::Index size = samples_.rows();
+    const Eigen::Index features = samples_.cols();
+    // Sample-major, so that each pair reads two contiguous rows; the features summed in
+    // order, as the kernel sums them when it computes a column from the samples.
+    const Eigen::MatrixXd by_sample = samples_.transpose();
     distances_.resize(size, size);
     for (Eigen::Index column = 0; column < size; ++column) {
+      const double* at_column = by_sample.col(column).data();
       distances_(column, column) = 0;
       for (Eigen::Index row = column + 1; row < size; ++row) {
-        const double squared = (samples_.row(row) - samples_.row(column)).squaredNorm();
+        const double* at_row = by_sample.col(row).data();
+        double squared = 0;
+        for (Eigen::Index f = 0; f < features; ++f) {
+          const double difference = at_row[f] - at_column[f];
+          squared += difference * difference;
+        }
         distances_(row, column) = squared;
         distances_(column, row) = squared;
       }

@@ -250,13 +250,16 @@ SvrObjective::SvrObjective(const Eigen::MatrixXd& samples, const Eigen::VectorXd
     case TuneObjective::holdout: held_out.push_back(holdout_range(n, options.holdout_fraction)); break;
     case TuneObjective::train: held_out.push_back({n, n}); break;
   }
-  // Squared distances only when every subset's n² doubles fit the budget together.
+  // Squared distances only with many features, and when every subset's n² doubles fit
+  // the budget together.
   double distance_mb = 0;
   for (const auto& block : held_out) {
     const double m = static_cast<double>(n - block.size());
     distance_mb += m * m * sizeof(double) / (1024.0 * 1024.0);
   }
-  const double per_subset_budget = distance_mb <= options.distance_budget_mb ? 1e300 : 0.0;
+  const bool store_distances = samples.cols() > SvrTuningOptions::kDistanceFeatures &&
+                               distance_mb <= options.distance_budget_mb;
+  const double per_subset_budget = store_distances ? 1e300 : 0.0;
 
   for (const auto& block : held_out) {
     State::Split split{SvrDataset(rows_except(samples, block), per_subset_budget), rows_except(targets, block), {}, {}};
@@ -303,6 +306,10 @@ double SvrObjective::operator()(double C, double sigma, double epsilon) const {
 long SvrObjective::fits() const { return state_->fits.load(); }
 long SvrObjective::capped_fits() const { return state_->capped_fits.load(); }
 long SvrObjective::low_rank_fits() const { return state_->low_rank_fits.load(); }
+
+bool SvrObjective::stores_distances() const {
+  return !state_->splits.empty() && state_->splits.front().training.has_distances();
+}
 
 // ---------------------------------------------------------------------------------------
 // The search.

@@ -88,9 +88,15 @@ struct SvrTuningOptions {
   // 0 means: as in `solver`.
   double search_tolerance = 1e-2;
   long search_max_iterations = 20'000;
-  // Squared distances of each training subset kept in memory when all subsets fit this
-  // budget (then a kernel column is n exp()s); 0: computed from the samples per column.
-  double distance_budget_mb = 0;
+  // Squared distances of each training subset kept in memory when the samples have more
+  // than kDistanceFeatures features and all subsets fit this budget together (then a
+  // kernel column is n exp()s, not n distances over every feature); 0: always computed
+  // from the samples per column. With the paper's pair or a few terms a distance costs
+  // less than reading it from memory (docs/svr.md); with the tens of terms of
+  // `--features auto` the stored distances cut the tuning's CPU time by more than half
+  // (docs/tuning.md).
+  static constexpr Eigen::Index kDistanceFeatures = 16;
+  double distance_budget_mb = 256;
 
   optim::ProgressCallback progress;  // forwarded to the optimizer; returning false stops
 
@@ -158,6 +164,8 @@ class SvrObjective {
   long fits() const;         // fits run so far
   long capped_fits() const;  // of those, stopped at the iteration cap
   long low_rank_fits() const;  // of those, solved through a complete low-rank factor
+  // Whether the training subsets keep their squared distances (options.distance_budget_mb).
+  bool stores_distances() const;
 
  private:
   struct State;

@@ -174,6 +174,40 @@ TEST(SvrObjective, CappedFitsStillScore) {
   EXPECT_EQ(objective.capped_fits(), 1);
 }
 
+// The identified terms of `--features auto` are tens of columns: the tuning then keeps
+// each training subset's squared distances, and every score is the one computed from the
+// samples (the same sums in the same order).
+TEST(SvrObjective, StoredDistancesScoreAsComputedOnes) {
+  const Problem base = sine_problem(400, 0.2, 17);
+  const Eigen::Index wide = SvrTuningOptions::kDistanceFeatures + 4;
+  std::mt19937 generator(5);
+  std::normal_distribution<double> jitter(0.0, 0.3);
+  Eigen::MatrixXd samples(base.samples.rows(), wide);
+  for (Eigen::Index row = 0; row < samples.rows(); ++row) {
+    for (Eigen::Index column = 0; column < wide; ++column) {
+      samples(row, column) = base.samples(row, 0) * std::cos(0.3 * static_cast<double>(column)) + jitter(generator);
+    }
+  }
+  SvrTuningOptions options;
+  const SvrObjective stored(samples, base.targets, options);
+  ASSERT_TRUE(stored.stores_distances());
+  options.distance_budget_mb = 0;
+  const SvrObjective computed(samples, base.targets, options);
+  ASSERT_FALSE(computed.stores_distances());
+  for (const auto& [C, sigma] : {std::pair{0.5, 0.3}, std::pair{10.0, 2.0}, std::pair{1e3, 6.0}}) {
+    const double from_memory = stored(C, sigma, 0.01);
+    const double from_samples = computed(C, sigma, 0.01);
+    EXPECT_NEAR(from_memory, from_samples, 1e-12 * from_samples) << "C " << C << " sigma " << sigma;
+  }
+  EXPECT_EQ(stored.capped_fits(), computed.capped_fits());
+  // Few features: a distance is cheaper to compute than to read, so none is kept.
+  EXPECT_FALSE(SvrObjective(base.samples, base.targets, SvrTuningOptions{}).stores_distances());
+  // Over the budget: none either.
+  SvrTuningOptions tight;
+  tight.distance_budget_mb = 0.5;
+  EXPECT_FALSE(SvrObjective(samples, base.targets, tight).stores_distances());
+}
+
 TEST(SvrTuning, IdenticalForOneAndTwoThreads) {
   const Problem problem = sine_problem(300, 0.2, 11);
   for (TuneMethod method : {TuneMethod::afsa, TuneMethod::random}) {
