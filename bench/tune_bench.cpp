@@ -3,7 +3,7 @@
 //   build/bin/tune_bench [--evaluations N] [--grid-evaluations N] [--threads N]
 //                        [--objective cv|holdout|train] [--methods afsa,grid,random]
 //                        [--search-tolerance T] [--search-max-iterations N] [--seed S]
-//                        [--kernel auto|exact] [--low-rank-landmarks N]
+//                        [--kernel auto|exact] [--low-rank-landmarks N] [--features paper|auto]
 //   build/bin/tune_bench --points C:SIGMA,...
 //
 // The default simulated test (two chamber cycles, 1 Hz, three axes). For each axis the
@@ -16,7 +16,11 @@
 // step cap, solved through a low-rank factor), seconds; then totals. With --points, no
 // tuning: each (C, σ) is fitted on all of cycle 1 as the search fits it (SMO with the
 // search's tolerance and cap; the low-rank path) and by SMO to a 1e-5 tolerance, and the
-// ε-SVR primal objective of each function is printed. docs/tuning.md has measured figures.
+// ε-SVR primal objective of each function is printed. With --features auto the inputs are
+// the terms `fit --features auto` identifies on cycle 1 and the target their linear fit's
+// residual (the partially linear SVR); with more than 16 of them AFSA also runs with every
+// squared distance computed per column, for the ratio against the stored distances.
+// docs/tuning.md has measured figures.
 #include <time.h>
 
 #include <chrono>
