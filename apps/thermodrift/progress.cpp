@@ -23,12 +23,12 @@ bool ProgressPrinter::tuning(std::size_t axis, std::size_t axes, const optim::Pr
   if (terminal_) {
     constexpr int kWidth = 24;
     const int filled = static_cast<int>(done * kWidth);
-    fmt::print(stderr, "\r{} [{:<{}}] axis {}/{} iter {} evals {} best {:.3g} ~{:.0f}s left  ", what_,
+    fmt::print(stderr, "\r{} [{:<{}}] axis {}/{} iter {} evals {} best {:.3g} ~{:.0f}s left in its tuning  ", what_,
                std::string(static_cast<std::size_t>(std::max(0, std::min(kWidth, filled))), '#'), kWidth,
                axis + 1, axes, progress.iteration, progress.evaluations, progress.best_value, left);
     drawn_ = true;
   } else if (now - last_line_ >= std::chrono::seconds(1)) {
-    fmt::print(stderr, "{}: axis {}/{} iteration {} evaluations {} best {:.4g} ({:.0f} % of the axis, ~{:.0f} s left)\n",
+    fmt::print(stderr, "{}: axis {}/{} iteration {} evaluations {} best {:.4g} ({:.0f} % of the axis' tuning, ~{:.0f} s left in it)\n",
                what_, axis + 1, axes, progress.iteration, progress.evaluations, progress.best_value,
                100 * progress.fraction_done, left);
     last_line_ = now;

@@ -479,6 +479,10 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
       fitted.fit.tuning = std::move(record);
       const bool judged = options.partially_linear && !options.keep_kernel;
       if (judged && identified && identified->held_out.blocks.size() >= 2) {
+        if (options.selection_progress) {
+          options.selection_progress(axis, fmt::format("tuned; judging the kernel by nested {}-fold CV",
+                                                       identified->held_out.blocks.size()));
+        }
         KernelCheckRecord check = check_kernel(features, target, terms, *identified, svr.scaling, solver);
         check.with_kernel_mse = in_dph2(check.with_kernel_mse);
         check.linear_part_mse = in_dph2(check.linear_part_mse);
