@@ -8,6 +8,7 @@
 //                                  [--without turn-on,self-heating]
 //                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
+//                                  [--cv-score geometric|pooled]
 //                                  [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
@@ -105,6 +106,7 @@ struct Arguments {
   bool other_channels = FeatureSelectionOptions{}.other_channels;  // --node-channel any|own
   double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
   bool node_under_dynamics = FeatureSelectionOptions{}.node_under_dynamics;  // --node-under-dynamics on|off
+  FeatureSelectionOptions::CvScore cv_score = FeatureSelectionOptions{}.cv_score;  // --cv-score geometric|pooled
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -137,6 +139,9 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--rate-span") args.rate_span = std::stod(value);
     else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
+    else if (flag == "--cv-score" && (value == "geometric" || value == "pooled")) {
+      args.cv_score = value == "pooled" ? FeatureSelectionOptions::CvScore::pooled : FeatureSelectionOptions::CvScore::geometric;
+    }
     else if (flag == "--node-channel" && (value == "own" || value == "any")) args.other_channels = value == "any";
     else if (flag == "--identify" && (value == "greedy" || value == "thermal-node")) {
       args.identify = value == "greedy" ? FeatureSelectionOptions::Method::greedy
@@ -433,6 +438,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       options.selection.other_channels = args.other_channels;
       options.selection.max_cancellation = args.max_cancellation;
       options.selection.node_under_dynamics = args.node_under_dynamics;
+      options.selection.cv_score = args.cv_score;
       options.folds_by = args.folds_by;
       if (args.rate_span && method != Method::paper) options.rate_span_seconds = args.rate_span;
       if (chooses_features(options)) {

@@ -111,7 +111,8 @@ struct Fields<SelectionRecord> {
       Field{"path", &SelectionRecord::path},
       Field{"temperature_channel", &SelectionRecord::temperature_channel},
       Field{"power_on_start", &SelectionRecord::power_on_start},
-      Field{"node_under_dynamics", &SelectionRecord::node_under_dynamics}};
+      Field{"node_under_dynamics", &SelectionRecord::node_under_dynamics},
+      Field{"cv_score", &SelectionRecord::cv_score}};
 };
 template <>
 struct Fields<StepwiseStepRecord> {

@@ -175,12 +175,16 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
       page << "<h2>Feature selection</h2>\n<p>Terms identified per axis on the training part as one thermal "
               "node: its lag (or two lags in series, or a lag with a lead) on a grid limited to what the log can "
               "identify, a piecewise-linear map of its temperature, its rate and the sensor's, then a Shupe term, "
-              "a memory, a play or a second lag while each cuts the blocked cross-validation MSE of least squares "
-              "by more than "
+              "a memory, a play or a second lag while each cuts the score by more than "
            << num(100.0 * first["min_gain"].get<double>())
-           << " %, every time constant refined (docs/features.md). For the SVR the terms are its linear part and "
-              "the kernel fits the residual. These CV figures are selection scores on the training part; the "
-              "held-out table says how well the terms generalize.</p>\n";
+           << " %, every time constant refined (docs/features.md). The score is the least-squares fit's blocked "
+              "cross-validation: "
+           << (first.value("cv_score", std::string("pooled")) == "geometric_mean"
+                   ? "the geometric mean of the held-out blocks' MSEs (the typical block), "
+                   : "the MSE pooled over the held-out blocks, ")
+           << "the <code>average</code> step and the <b>chosen</b> rows the MSE pooled over the blocks. For the SVR "
+              "the terms are its linear part and the kernel fits the residual. These CV figures are selection "
+              "scores on the training part; the held-out table says how well the terms generalize.</p>\n";
     } else {
       page << "<h2>Feature selection</h2>\n<p>Terms chosen per axis on the training part by forward selection over "
               "lags and thermal terms, scored by the blocked cross-validation MSE of least squares (time constants "
@@ -194,7 +198,7 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
       const auto& selection = entry["selection"];
       page << "<table><caption>" << escape(entry["axis"].get<std::string>()) << " ("
            << selection["candidates_scored"].get<std::size_t>() << " candidate sets scored)</caption>\n"
-           << "<tr><th>step</th><th>term</th><th>CV MSE, (°/h)²</th></tr>\n"
+           << "<tr><th>step</th><th>term</th><th>CV score, (°/h)²</th></tr>\n"
            << "<tr><td>start</td><td>constant</td><td>" << num(selection["start_mse"]) << "</td></tr>\n";
       for (const auto& step : selection["path"]) {
         page << "<tr><td>" << escape(step["action"].get<std::string>()) << "</td><td><code>"

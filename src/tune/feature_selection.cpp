@@ -117,6 +117,7 @@ SelectionRecord FeatureSelection::record(const FeatureSelectionOptions& options)
   if (thermal_node) {
     out.power_on_start = options.power_on_start;
     out.node_under_dynamics = options.node_under_dynamics;
+    out.cv_score = options.cv_score == FeatureSelectionOptions::CvScore::geometric ? "geometric_mean" : "pooled";
   }
   return out;
 }

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include <fmt/format.h>
@@ -257,6 +258,8 @@ LeastSquaresScore ColumnCache::cv_score(const std::vector<std::string>& names, c
   // the inner products, which would lose digits where a fit's terms cancel).
   double squared_error = 0, held_out = 0;
   Eigen::VectorXd residual;
+  LeastSquaresScore score;
+  score.block_mse.reserve(blocks.size());
   for (std::size_t b = 0; b < blocks.size(); ++b) {
     const Eigen::VectorXd beta = equations.fold_coefficients(b);
     const SampleRange& block = blocks[b];
@@ -264,10 +267,11 @@ LeastSquaresScore ColumnCache::cv_score(const std::vector<std::string>& names, c
     for (Eigen::Index j = 0; j < q; ++j) {
       residual -= (beta(j) * scale(j)) * values[static_cast<std::size_t>(j)]->segment(block.begin, block.size());
     }
-    squared_error += residual.squaredNorm();
+    const double block_error = residual.squaredNorm();
+    score.block_mse.push_back(block.size() > 0 ? block_error / static_cast<double>(block.size()) : 0.0);
+    squared_error += block_error;
     held_out += static_cast<double>(block.size());
   }
-  LeastSquaresScore score;
   score.cv_mse = held_out > 0 ? squared_error / held_out : 0.0;
   // The cancellation of the fit on all rows (models/linear.hpp's, from the same sums):
   // the spread of v = Σ_J x_j β_j is √(Σv²/n − (Σv/n)²), Σv = Σ_J β_j Σx_j.
@@ -288,6 +292,13 @@ LeastSquaresScore ColumnCache::cv_score(const std::vector<std::string>& names, c
   for (Eigen::Index j = grouped; j < p; ++j) parts += spread(1 + j, 1);
   score.cancellation = parts / whole;
   return score;
+}
+
+double LeastSquaresScore::typical_block_mse() const {
+  if (block_mse.empty()) return cv_mse;
+  double logs = 0;
+  for (const double mse : block_mse) logs += std::log(std::max(mse, std::numeric_limits<double>::min()));
+  return std::exp(logs / static_cast<double>(block_mse.size()));
 }
 
 double held_out_mse(const Eigen::VectorXd& predicted, const Eigen::VectorXd& y, const std::vector<SampleRange>& blocks) {

@@ -28,6 +28,9 @@ inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 struct LeastSquaresScore {
   double cv_mse = 0;
   double cancellation = 1;
+  std::vector<double> block_mse;  // ColumnCache::cv_score: each held-out block's MSE, in order
+  // The geometric mean of block_mse (FeatureSelectionOptions::CvScore::geometric).
+  double typical_block_mse() const;
 };
 
 // The samples cut by held-out blocks into segments: each block (segment = its index),

@@ -231,16 +231,24 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   FeatureSelection result;
   result.scored_by = "least_squares";
   result.held_out = cache->blocks(options.folds, options.folds_by);
+  // A set's score: its blocked CV (the geometric mean of the blocks' MSEs, or their pooled
+  // MSE: options.cv_score), times (c / max_cancellation)² when its fit cancels c times more.
+  const bool typical = options.cv_score == FeatureSelectionOptions::CvScore::geometric;
+  auto penalized = [&](const NodeModel& model, bool by_typical_block) {
+    // The node's level and its hinges are one part: a piecewise-linear map cancels by design.
+    const LeastSquaresScore scored = cache->cv_score(model.terms(), result.held_out.blocks,
+                                                     static_cast<Eigen::Index>(1 + model.knots.size()));
+    const double cv = by_typical_block ? scored.typical_block_mse() : scored.cv_mse;
+    const double excess = scored.cancellation / options.max_cancellation;
+    return excess > 1 ? cv * excess * excess : cv;
+  };
   auto score = [&](const NodeModel& model) {
     options.stop.throw_if_requested("feature identification");
     ++result.candidates_scored;
-    // The node's level and its hinges are one part: a piecewise-linear map cancels by design.
-    const auto [cv, cancelled] = cache->cv_score(model.terms(), result.held_out.blocks,
-                                                 static_cast<Eigen::Index>(1 + model.knots.size()));
-    const double excess = cancelled / options.max_cancellation;
-    return excess > 1 ? cv * excess * excess : cv;
+    return penalized(model, typical);
   };
-  result.start_mse = least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, result.held_out.blocks);
+  result.start_mse = typical ? cache->cv_score({}, result.held_out.blocks, 0).typical_block_mse()
+                             : least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, result.held_out.blocks);
 
   // A lag is identifiable when the log holds several of it: at most a quarter of its span.
   const double longest = std::min(options.max_time_constant, training_span_seconds(logs) / 4.0);
@@ -335,7 +343,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     cache = &on;
     nodes.push_back(find_node());
     if (caches.size() > 1) {
-      result.path.push_back({"channel", fmt::format("temperature channel {}: {} (single lag: CV MSE {:.6g})",
+      result.path.push_back({"channel", fmt::format("temperature channel {}: {} (single lag: score {:.6g})",
                                                     channels[nodes.size() - 1] + 1, nodes.back().path.back().term,
                                                     nodes.back().lag_cv),
                              nodes.back().best_cv, nodes.back().best.terms()});
@@ -628,7 +636,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       members = std::move(own);
     }
     result.path.push_back({"channel",
-                           fmt::format("temperature channel {} grown to CV MSE {:.6g}, the axis' own to {:.6g}: {} kept",
+                           fmt::format("temperature channel {} grown to a score of {:.6g}, the axis' own to {:.6g}: {} kept",
                                        channels[best_channel] + 1, other_cv, own_cv, other ? "the other" : "the own"),
                            std::min(other_cv, own_cv),
                            std::min_element(members.begin(), members.end(),
@@ -658,7 +666,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   }
   result.terms = names;
   if (distinct_members == 1) {
-    result.cv_mse = kept.front().cv;
+    result.cv_mse = typical ? penalized(kept.front().model, false) : kept.front().cv;  // pooled, as averages are
     return result;
   }
   Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());

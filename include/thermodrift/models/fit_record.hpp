@@ -118,6 +118,9 @@ struct SelectionRecord {
   std::optional<std::size_t> temperature_channel;  // 1-based, when the node is on another channel
   std::optional<bool> power_on_start;              // thermal_node only
   std::optional<bool> node_under_dynamics;
+  // thermal_node: what the path's scores are: "geometric_mean" of the held-out blocks'
+  // MSEs, or "pooled" MSE (absent in files written before it was recorded: pooled).
+  std::optional<std::string> cv_score;
 };
 
 // One step of a stepwise regression (models/linear.hpp's fit_stepwise).

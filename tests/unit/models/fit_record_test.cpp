@@ -85,6 +85,7 @@ FitRecord every_member() {
   f.temperature_channel = 2;
   f.power_on_start = true;
   f.node_under_dynamics = false;
+  f.cv_score = "geometric_mean";
   r.feature_selection = f;
   r.training_samples = 2280;
   ResidualMetrics m;
@@ -110,6 +111,7 @@ TEST(FitRecord, EveryMemberSurvivesItsJson) {
   ASSERT_TRUE(back.feature_selection);
   EXPECT_EQ(back.feature_selection->path.at(1).terms.at(1), "rate");
   EXPECT_EQ(back.feature_selection->temperature_channel, std::optional<std::size_t>(2));
+  EXPECT_EQ(json["feature_selection"]["cv_score"], "geometric_mean");
   ASSERT_TRUE(back.compressed);
   EXPECT_EQ(back.compressed->data, std::optional<std::vector<std::string>>(std::vector<std::string>{"cycle2.csv"}));
   EXPECT_EQ(json["compressed"]["training_mse_unit"], "(deg/h)^2");

@@ -34,6 +34,22 @@ void expect_same_score(ColumnCache& cache, const std::vector<std::string>& names
   const double tolerance = expected.cv_mse < 10 * variance ? 1e-9 : 1e-5;
   EXPECT_NEAR(got.cv_mse, expected.cv_mse, tolerance * expected.cv_mse) << set;
   EXPECT_NEAR(got.cancellation, expected.cancellation, tolerance * expected.cancellation) << set;
+  // Each block's MSE, from the same held-out predictions; their geometric mean.
+  const Eigen::VectorXd predicted = least_squares_cv_predictions(cache.matrix(names), y, blocks);
+  ASSERT_EQ(got.block_mse.size(), blocks.size()) << set;
+  double logs = 0;
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const SampleRange& block = blocks[b];
+    const double mse = (y.segment(block.begin, block.size()) - predicted.segment(block.begin, block.size())).squaredNorm() /
+                       static_cast<double>(block.size());
+    EXPECT_NEAR(got.block_mse[b], mse, tolerance * mse) << set << "block " << b;
+    logs += std::log(mse);
+  }
+  const double typical = std::exp(logs / static_cast<double>(blocks.size()));
+  EXPECT_NEAR(got.typical_block_mse(), typical, tolerance * typical) << set;
+  double mean = 0;
+  for (const double mse : got.block_mse) mean += mse / static_cast<double>(blocks.size());
+  EXPECT_LE(got.typical_block_mse(), mean * (1 + 1e-12)) << set << "(a geometric mean is at most the mean)";
 }
 
 TEST(ColumnCache, CvScoreFromKeptProductsMatchesTheGramOverAllRows) {

@@ -24,6 +24,7 @@
 #include "thermodrift/sim/law_family.hpp"
 #include "thermodrift/sim/standard_normal.hpp"
 #include "thermodrift/tune/calibration.hpp"
+#include "tune/term_columns.hpp"
 
 namespace thermodrift {
 namespace {
@@ -89,18 +90,16 @@ bool has_atom(const Pipeline& pipeline, FeatureAtom::Kind kind, double* level = 
 
 // Where the identification averaged several searches (fit.feature_selection's "average"
 // step), the model is the mean of the kept members' least-squares fits, each on its own
-// terms of the training log, and the blocked CV of that mean is at most the mean of theirs.
-// Returns whether the axis was averaged.
+// terms of the training log, and the blocked CV MSE of that mean is at most the mean of
+// theirs (each member's pooled CV MSE recomputed here: the path scores them by the typical
+// block). Returns whether the axis was averaged.
 bool check_average(const AxisModel& axis, const ChamberLog& training, std::size_t a) {
-  const auto& path = axis.fit.feature_selection.value().path;
+  const SelectionRecord& selection = axis.fit.feature_selection.value();
+  const auto& path = selection.path;
   std::vector<std::vector<std::string>> member_terms;
-  std::vector<double> member_cv;
   std::string kept;
   for (const auto& step : path) {
-    if (step.action == "member") {
-      member_terms.push_back(step.terms);
-      member_cv.push_back(step.cv_mse);
-    }
+    if (step.action == "member") member_terms.push_back(step.terms);
     if (step.action == "average") kept = step.term;
   }
   EXPECT_GE(member_terms.size(), 3u) << "one search per memory rate scale at least";
@@ -119,13 +118,14 @@ bool check_average(const AxisModel& axis, const ChamberLog& training, std::size_
     for (const auto& name : member_terms[m]) pipeline.terms.push_back(FeatureTerm::parse(name));
     const FeatureTable table = feature_table({training}, pipeline, a, true);
     mean += fit_least_squares(table.features, table.target, linear_regressors(pipeline.terms.size())).predict(table.features);
-    mean_cv += member_cv[m];
+    const auto blocks = cv_blocks(table.target.size(), {0}, static_cast<int>(selection.folds), FoldsBy::time).blocks;
+    mean_cv += least_squares_cv(table.features, table.target, blocks);
     ++count;
   }
   EXPECT_GE(count, 2);
   mean /= count;
   EXPECT_LT((averaged - mean).cwiseAbs().maxCoeff(), 1e-6 * averaged.cwiseAbs().maxCoeff());
-  EXPECT_LE(axis.fit.feature_selection.value().cv_mse, mean_cv / count * (1 + 1e-12));
+  EXPECT_LE(selection.cv_mse, mean_cv / count * (1 + 1e-9));
   return true;
 }
 
@@ -135,6 +135,24 @@ ChamberLog axis_alone(ChamberLog log, std::size_t a) {
   std::swap(log.temperature[0], log.temperature[a]);
   std::swap(log.temperature_names[0], log.temperature_names[a]);
   return log;
+}
+
+// Axis a of development law `seed` alone (every thermometer, its own first): cycle 1 of a
+// two-cycle run as the training log, a new run of the unit through a programme of `kind`,
+// and that run's noise floor from 1800 s on.
+struct LawAxis {
+  ChamberLog training, other;
+  double floor = 0;
+};
+
+LawAxis law_axis(std::uint64_t seed, std::size_t a, sim::ProfileKind kind) {
+  const sim::UnitLaw unit = sim::draw_unit(seed);
+  const sim::ChamberRun run =
+      sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, seed, 2), sim::derive_seed(seed, 1));
+  const sim::ChamberRun other =
+      sim::simulate_unit(unit, sim::draw_profile(kind, unit, sim::derive_seed(seed, 12), 1), sim::derive_seed(seed, 2));
+  return {slice_rows(axis_alone(sim::to_chamber_log(run), a), 0, run.cycle_start_rows().at(1)),
+          axis_alone(sim::to_chamber_log(other), a), other.noise_floor(100, 1800)[a]};
 }
 
 // `--model linear --features auto` fitted on cycle 1 of a run, judged on cycle 2 with the
@@ -188,8 +206,8 @@ TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
 // Thermometers swapped between blocks: x's own sits on y's far node (a 1600 s node behind
 // a 400 s one), y's own on x's coil (600 s behind the case). Each axis' coil is then
 // measured by the other axis' thermometer, and its own lags or leads it by a thousand
-// seconds. The node is found on the other channel, its delay behind that thermometer is
-// short, and the next cycle is held to the same bound as the plain units above.
+// seconds. x's node is found on y's thermometer, its delay behind it short, and every
+// axis' next cycle is held to the same bound as the plain units above.
 TEST(ThermalNode, FindsTheNodeOnAnotherAxisThermometer) {
   sim::UnitLaw unit = known_unit();
   unit.axes[0].hysteresis = sim::HysteresisKind::none;
@@ -210,14 +228,20 @@ TEST(ThermalNode, FindsTheNodeOnAnotherAxisThermometer) {
   options.selection.other_channels = false;
   const auto own_channel = evaluate_from(calibrate({first_cycle}, LogSpec{}, options).model, log, split);
   const auto floor = run.noise_floor(100, split);
-  const std::optional<std::size_t> expected[3] = {1, 0, std::nullopt};
   for (std::size_t a = 0; a < 3; ++a) {
     const Pipeline& pipeline = calibration.model.axes[a].pipeline;
     std::printf("%c: channel %zu, delay %.0f s, held-out %.2f x floor (own channel only: %.2f); %s\n", "xyz"[a],
                 pipeline.temperature_input(a) + 1, node_delay(pipeline), held_out[a].mse_after / floor[a],
                 own_channel[a].mse_after / floor[a], fmt::format("{}", fmt::join(pipeline.term_names(), " ")).c_str());
-    EXPECT_EQ(pipeline.temperature_channel, expected[a]) << "xyz"[a];
+    EXPECT_LT(held_out[a].mse_after / floor[a], 3.0) << "xyz"[a] << ": held-out MSE over the noise floor, next cycle";
   }
+  // x's own thermometer is on y's far node, 2,000 s from the case, x's coil 600 s: on it,
+  // 8.7x the floor. y's coil is described as well by a lag of y's own thermometer (on x's
+  // coil, some 1,400 s upstream) as by x's, which sits on it (2.0x either way; scored by
+  // the pooled CV MSE the search took x's): either may be kept. z has only its own.
+  EXPECT_EQ(calibration.model.axes[0].pipeline.temperature_channel, std::optional<std::size_t>(1));
+  EXPECT_LT(held_out[0].mse_after, 0.5 * own_channel[0].mse_after) << "x: the other thermometer must pay";
+  EXPECT_EQ(calibration.model.axes[2].pipeline.temperature_channel, std::nullopt);
   EXPECT_LT(std::abs(node_delay(calibration.model.axes[0].pipeline)), 300.0) << "x's coil is y's thermometer's node";
 }
 
@@ -254,7 +278,11 @@ TEST(ThermalNode, FindsTheStartOfARun) {
       EXPECT_FALSE(has_atom(calibration.model.axes[a].pipeline, FeatureAtom::Kind::turn_on)) << "xyz"[a];
     }
   }
-  EXPECT_LT(2 * ratio[0], ratio[1]) << "held-out MSE over the noise floor, next cycle carried";
+  // Scored by the pooled CV MSE, the search without the terms let the first minutes bend
+  // x's coefficients (next cycle 2x worse and more). Scored by the typical block, one
+  // block's transient no longer decides, and the fits meet (2.2x either way): the terms
+  // must be found and must not cost.
+  EXPECT_LT(ratio[0], 1.25 * ratio[1]) << "held-out MSE over the noise floor, next cycle carried";
   EXPECT_LT(ratio[0], 3.0);
 }
 
@@ -314,16 +342,7 @@ TEST(ThermalNode, BoundsHowMuchTheFitCancels) {
 // channel's grown model wins, with a node found again on it. The model's CV MSE and its
 // error on a slow programme (a new run of the unit) must both fall.
 TEST(ThermalNode, SearchesTheNodeAndItsThermometerAgainUnderItsDynamicTerms) {
-  const std::uint64_t seed = 9;
-  const sim::UnitLaw unit = sim::draw_unit(seed);
-  const sim::ChamberRun run =
-      sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, seed, 2), sim::derive_seed(seed, 1));
-  const sim::ChamberRun slow =
-      sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::slow, unit, sim::derive_seed(seed, 12), 1),
-                         sim::derive_seed(seed, 2));
-  const ChamberLog training = slice_rows(axis_alone(sim::to_chamber_log(run), 1), 0, run.cycle_start_rows().at(1));
-  const ChamberLog other = axis_alone(sim::to_chamber_log(slow), 1);
-  const double floor = slow.noise_floor(100, 1800)[1];
+  const auto [training, other, floor] = law_axis(9, 1, sim::ProfileKind::slow);
 
   double cv[2] = {0, 0}, ratio[2] = {0, 0};
   bool renoded[2] = {false, false}, own_channel[2] = {false, false};
@@ -333,6 +352,11 @@ TEST(ThermalNode, SearchesTheNodeAndItsThermometerAgainUnderItsDynamicTerms) {
     options.model = ModelKind::linear;
     options.terms = {"auto"};
     options.selection.node_under_dynamics = again;
+    // The pooled score this was measured under (28.5x against 542x here). Scored by the
+    // typical block (the default) this slow programme is missed either way (the search
+    // again 664x, once 518x), while the benchmark's tests of development law 9 y went from
+    // 5.1-8.7x to 1.8-2.8x (docs/generalization.md, "Scored by the typical block").
+    options.selection.cv_score = FeatureSelectionOptions::CvScore::pooled;
     const Calibration calibration = calibrate({training}, LogSpec{}, options);
     const AxisModel& axis = calibration.model.axes[0];
     const SelectionRecord& selection = axis.fit.feature_selection.value();
@@ -405,8 +429,48 @@ TEST(ThermalNode, FindsAnAsymmetricAndATemperatureDependentRateResponse) {
   std::printf("x: held-out %.2f x floor; %s\n", held_out[0].mse_after / floor[0], terms.c_str());
   EXPECT_TRUE(asymmetric) << "the node's rate times its direction of travel";
   EXPECT_TRUE(tempco) << "the node's level times its rate";
-  EXPECT_NEAR(node_delay(pipeline), 600, 150);
+  // The rate responses read the coil's lag (600 s behind the thermometer). The static map
+  // may take a lead-lag node in the default's search (599 s with a 559 s lead: the map of a
+  // nearly unlagged temperature, the rate terms making up the delay), which the next
+  // cycle cannot tell from the coil's lag; it is held below by the held-out bound.
+  double rate_lag = 0;
+  for (const auto& term : pipeline.terms) {
+    if (term.factors.size() == 1 && term.factors[0].atom.kind == FeatureAtom::Kind::lag_rate && rate_lag == 0) {
+      rate_lag = term.factors[0].atom.tau;
+    }
+  }
+  EXPECT_NEAR(rate_lag, 600, 150) << "s: the node's rate, the coil's";
   EXPECT_LT(held_out[0].mse_after / floor[0], 3.0) << "held-out MSE over the noise floor, next cycle";
+}
+
+// Development law 5, x: the thermometer on the first of two nodes, the coil 666 s behind
+// it, a tanh static, rate terms and a turn-on transient; no hysteresis, no Shupe term.
+// Scored by the pooled CV MSE of one cycle, the search took two lags in series (338 s and
+// 315 s) with a Shupe term and a heating/cooling memory the law does not have, and missed a
+// fast programme (2-3 °C/min, three times the training ramps) by 123x the floor. Scored by
+// the typical block: single lags near 660 s, no memory, 3.3x.
+TEST(ThermalNode, ScoresSetsByTheTypicalBlock) {
+  const auto [training, other, floor] = law_axis(5, 0, sim::ProfileKind::fast);
+
+  double ratio[2] = {0, 0}, delay[2] = {0, 0};
+  for (const auto score : {FeatureSelectionOptions::CvScore::geometric, FeatureSelectionOptions::CvScore::pooled}) {
+    const int k = score == FeatureSelectionOptions::CvScore::geometric ? 0 : 1;
+    CalibrationOptions options;
+    options.model = ModelKind::linear;
+    options.terms = {"auto"};
+    options.selection.other_channels = false;  // the own thermometer: the case at hand, and a third of the time
+    options.selection.cv_score = score;
+    const Calibration calibration = calibrate({training}, LogSpec{}, options);
+    const AxisModel& axis = calibration.model.axes[0];
+    EXPECT_EQ(axis.fit.feature_selection.value().cv_score, k == 0 ? "geometric_mean" : "pooled");
+    ratio[k] = evaluate(calibration.model, {other}, 1800)[0].mse_after / floor;
+    delay[k] = node_delay(axis.pipeline);
+    std::printf("%s: node delay %.0f s, fast programme %.3g x floor; %s\n", k == 0 ? "typical block" : "pooled",
+                delay[k], ratio[k], fmt::format("{}", fmt::join(axis.pipeline.term_names(), " ")).c_str());
+  }
+  EXPECT_NEAR(delay[0], 666, 100) << "s: the coil behind the thermometer";
+  EXPECT_LT(ratio[0], 6.0) << "held-out MSE over the noise floor, fast programme settled 1800 s";
+  EXPECT_LT(3 * ratio[0], ratio[1]) << "the pooled score no longer fails here: the test tests less";
 }
 
 // Stepwise on identified terms chooses among the terms themselves: no squares or products
