@@ -63,11 +63,12 @@ struct FeatureSelectionOptions {
   // thermal_node: what every comparison of the search (nodes, thermometers, terms, time
   // constants, members) scores a set by, from its blocked CV. `geometric`: the geometric
   // mean of the held-out blocks' MSEs, so a set must predict the typical block better, not
-  // only the pooled rows: one cycle's smoothed bias instability makes a few blocks noisy,
-  // and a set that follows them (a second lag of 54 s whose rate cancels the node's) won the
-  // pooled MSE by 15 % while it predicted 6 of 10 blocks worse, then missed a fast programme
-  // by 15x the floor (docs/features.md, "Scored by the typical block"). `pooled`: the
-  // pooled held-out MSE, the score before; only to measure what the change brings.
+  // only the pooled rows: one cycle's smoothed noise is uneven across its blocks, and a set
+  // that follows the noisiest wins their pooled MSE (development law 5, x: two lags in
+  // series beat a single lag by 14 % while predicting 6 of 10 blocks worse; the model grown
+  // on them missed a fast programme by 19x the floor, a single lag 1.3x; docs/features.md,
+  // "Scored by the typical block"). `pooled`: the pooled held-out MSE, the score before;
+  // only to measure what the change brings.
   enum class CvScore { pooled, geometric };
   CvScore cv_score = CvScore::geometric;
   // Asked before each set is scored (both methods): a stop request throws Interrupted.
