@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 #include "../support/temp_dir.hpp"
@@ -57,17 +58,21 @@ void expect_round_trip(const TempDir& dir, const std::string& log, const std::st
 
 // One test per law, so that ctest runs them side by side, and one model per law (each fit
 // is a whole identification, about half a minute): law 2 linear, on the default search
-// (the thermal node) and on the greedy one; law 8 stepwise; law 13 linear with the node
-// looked for on every thermometer (its x and z thermometers sit on each other's coils; z
-// takes x's); law 5 (FitAlwaysLoadsSvr) the SVR.
+// (the thermal node) and on the greedy one; law 8 stepwise, on a partial cycle; law 13
+// linear with the node looked for on every thermometer (its x and z thermometers sit on
+// each other's coils; z takes x's); law 5 (FitAlwaysLoadsSvr) the SVR, on a fast
+// programme, as fit leaves it (its nested CV left the kernel out on every axis when this
+// was written) and with the kernel kept, so that a file with support vectors goes through
+// evaluate and export too.
 class FitAlwaysLoads : public ::testing::TestWithParam<int> {};
 
 TEST_P(FitAlwaysLoads, OneModelOnADrawnLaw) {
   TempDir dir;
   const int law = GetParam();
   const std::string log = "law" + std::to_string(law) + ".csv";
-  const auto simulated =
-      run_thermodrift(dir, "simulate --law " + std::to_string(law) + " --profile cycle --cycles 1 --out " + log);
+  const std::string profile = law == 8 ? "partial" : "cycle";
+  const auto simulated = run_thermodrift(
+      dir, "simulate --law " + std::to_string(law) + " --profile " + profile + " --cycles 1 --out " + log);
   ASSERT_EQ(simulated.status, 0) << simulated.err;
   if (law == 2) {
     expect_round_trip(dir, log, "linear", "");
@@ -85,9 +90,15 @@ INSTANTIATE_TEST_SUITE_P(DevelopmentLaws, FitAlwaysLoads, ::testing::Values(2, 8
 
 TEST(FitAlwaysLoadsSvr, SvrOnADrawnLaw) {
   TempDir dir;
-  const auto simulated = run_thermodrift(dir, "simulate --law 5 --profile staircase --cycles 1 --out law5.csv");
+  const auto simulated = run_thermodrift(dir, "simulate --law 5 --profile fast --cycles 1 --out law5.csv");
   ASSERT_EQ(simulated.status, 0) << simulated.err;
   expect_round_trip(dir, "law5.csv", "svr", " --evaluations 6");
+  std::filesystem::copy_file(dir.file("law5.csv"), dir.file("kept.csv"));
+  expect_round_trip(dir, "kept.csv", "svr", " --evaluations 6 --keep-kernel");
+  const auto model = nlohmann::json::parse(testing::read_file(dir.file("kept.csv.svr.json")));
+  for (const auto& axis : model["axes"]) {
+    EXPECT_GT(axis["model"]["support_vectors"].size(), 0u) << "the kernel kept on every axis";
+  }
 }
 
 }  // namespace

@@ -34,7 +34,7 @@ double mse_after(const TempDir& dir, const std::string& model_file, std::size_t 
 
 TEST(Compress, WritesAModelOfAtMostKVectorsThatPredictsLikeTheOriginal) {
   TempDir dir;
-  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.2 --out log.csv").status, 0);
+  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
   const auto fit = run_thermodrift(dir, "fit --data log.csv --model svr --C 100 --sigma 1 --out svr.json" + kTwoAxes);
   ASSERT_EQ(fit.status, 0) << fit.err;
   ASSERT_GT(most_vectors(dir.file("svr.json")), 100u);

@@ -74,7 +74,7 @@ class Report : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new TempDir();
     const std::string t = binary();
-    auto simulated = testing::run_in(*dir_, t + " simulate --out chamber.csv --cycles 2 --rate 0.1");
+    auto simulated = testing::run_in(*dir_, t + " simulate --out chamber.csv --cycles 2 --rate 0.05");
     ASSERT_EQ(simulated.status, 0) << simulated.err;
     result_ = new testing::CommandResult(testing::run_in(
         *dir_, t + " report --data chamber.csv --time time_s --gyro gyro_x,gyro_y,gyro_z --temp temp_x,temp_y,temp_z"

@@ -208,12 +208,14 @@ TEST(SvrObjective, StoredDistancesScoreAsComputedOnes) {
   EXPECT_FALSE(SvrObjective(samples, base.targets, tight).stores_distances());
 }
 
+// Also the sanitize pass's check of the threaded tuning, so it is kept small: 106 s there
+// at 300 samples and 30 evaluations.
 TEST(SvrTuning, IdenticalForOneAndTwoThreads) {
-  const Problem problem = sine_problem(300, 0.2, 11);
+  const Problem problem = sine_problem(150, 0.2, 11);
   for (TuneMethod method : {TuneMethod::afsa, TuneMethod::random}) {
     SvrTuningOptions options;
     options.method = method;
-    options.evaluations = 30;
+    options.evaluations = 16;
     options.seed = 42;
     options.threads = 1;
     const SvrTuningResult one = tune_svr(problem.samples, problem.targets, options);
