@@ -62,7 +62,7 @@ FittedModel fit_svr(const Data& data, const IdentifiedLinearPart& identified) {
 }
 
 TEST(KernelCheck, ALinearDriftWithWhiteNoiseLeavesTheKernelOut) {
-  const Data data = make_data(1200, 0.0, 1);
+  const Data data = make_data(600, 0.0, 1);
   const IdentifiedLinearPart identified = blocks_of(data);
   const FittedModel fitted = fit_svr(data, identified);
   ASSERT_TRUE(fitted.fit.kernel_check.has_value());
@@ -95,7 +95,7 @@ TEST(KernelCheck, ALinearDriftWithWhiteNoiseLeavesTheKernelOut) {
 // keep_kernel (fit --keep-kernel): the same data as above, the kernel trained without the
 // check, and the tuning's CV quoted as the expected held-out figure.
 TEST(KernelCheck, KeepKernelTrainsTheKernelWithoutTheCheck) {
-  const Data data = make_data(1200, 0.0, 1);
+  const Data data = make_data(600, 0.0, 1);
   const IdentifiedLinearPart identified = blocks_of(data);
   CalibrationOptions options = svr_options();
   options.keep_kernel = true;
@@ -111,7 +111,7 @@ TEST(KernelCheck, KeepKernelTrainsTheKernelWithoutTheCheck) {
 }
 
 TEST(KernelCheck, AShapeEveryBlockRepeatsKeepsTheKernel) {
-  const Data data = make_data(1200, 0.8, 2);
+  const Data data = make_data(600, 0.8, 2);
   const IdentifiedLinearPart identified = blocks_of(data);
   const FittedModel fitted = fit_svr(data, identified);
   ASSERT_TRUE(fitted.fit.kernel_check.has_value());
@@ -130,7 +130,7 @@ TEST(KernelCheck, AShapeEveryBlockRepeatsKeepsTheKernel) {
 // An identification's averaged linear part is refitted per fold as it was built: each
 // set's least squares, averaged.
 TEST(KernelCheck, AnAveragedLinearPartIsRefittedPerSetInEachFold) {
-  const Data data = make_data(1200, 0.0, 3);
+  const Data data = make_data(600, 0.0, 3);
   IdentifiedLinearPart identified = blocks_of(data);
   identified.averaged_sets = {{"a"}, {"a", "b"}};
   LinearModel average = fit_least_squares(data.features, data.target, linear_regressors(2));
