@@ -294,7 +294,8 @@ Eigen::MatrixXd evaluate_terms(const std::vector<FeatureTerm>& terms, const Reco
       }
     }
   }
-  TermEvaluator evaluator(terms);
+  const bool sparse = inputs.dense_step_seconds > 0;
+  TermEvaluator evaluator(terms, sparse ? InputHold::linear : InputHold::step, inputs.dense_step_seconds / 2);
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> out(
       static_cast<Eigen::Index>(inputs.kept.size()), static_cast<Eigen::Index>(terms.size()));
   std::vector<double> values(terms.size());
@@ -313,6 +314,45 @@ Eigen::MatrixXd evaluate_terms(const std::vector<FeatureTerm>& terms, const Reco
     ++next;
   }
   return out;
+}
+
+RecordedInputs sparse_inputs(const RecordedInputs& inputs, std::size_t every) {
+  RecordedInputs sparse;
+  sparse.channels = inputs.channels;
+  sparse.target = inputs.target;
+  std::vector<double> steps;
+  for (const double step : inputs.step_seconds) {
+    if (step > 0) steps.push_back(step);
+  }
+  if (!steps.empty()) {
+    const auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+    std::nth_element(steps.begin(), middle, steps.end());
+    sparse.dense_step_seconds = *middle;
+  }
+  const std::size_t width = inputs.width();
+  std::size_t next = 0;  // the next kept row
+  std::size_t last = 0;  // the last row taken
+  double elapsed = 0;    // since it
+  for (std::size_t i = 0; i < inputs.rows(); ++i) {
+    const bool restart = !(inputs.step_seconds[i] > 0);
+    elapsed = restart ? 0.0 : elapsed + inputs.step_seconds[i];
+    const bool kept = next < inputs.kept.size() && inputs.kept[next] == i;
+    if (!(restart || kept || i == 0 || i - last >= every)) continue;
+    if (kept) {
+      sparse.kept.push_back(sparse.rows());
+      ++next;
+    }
+    sparse.delta_t.push_back(inputs.delta_t[i]);
+    sparse.rate.push_back(inputs.rate[i]);
+    sparse.step_seconds.push_back(elapsed);
+    sparse.channel_means.insert(sparse.channel_means.end(), inputs.channel_means.begin() + static_cast<std::ptrdiff_t>(i * width),
+                                inputs.channel_means.begin() + static_cast<std::ptrdiff_t>((i + 1) * width));
+    sparse.channel_rates.insert(sparse.channel_rates.end(), inputs.channel_rates.begin() + static_cast<std::ptrdiff_t>(i * width),
+                                inputs.channel_rates.begin() + static_cast<std::ptrdiff_t>((i + 1) * width));
+    last = i;
+    elapsed = 0;
+  }
+  return sparse;
 }
 
 void append_rows(FeatureTable& table, const FeatureTable& more) {

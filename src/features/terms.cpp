@@ -271,11 +271,22 @@ double lag_step(double state, double input, double step_seconds, double tau) {
   return a * state + (1.0 - a) * input;
 }
 
-double TermEvaluator::lag(double& memo_step, double& memo_decay, double state, double input, double step_seconds,
-                          double tau) {
-  if (!(step_seconds > 0)) return input;
-  if (step_seconds != memo_step) memo_step = step_seconds, memo_decay = std::exp(-step_seconds / tau);
-  return memo_decay * state + (1.0 - memo_decay) * input;
+double TermEvaluator::lag(Filter& filter, double input, double step_seconds, double tau) const {
+  if (hold_ == InputHold::step) {
+    if (!(step_seconds > 0)) return filter.value = input;
+    if (step_seconds != filter.step) filter.step = step_seconds, filter.decay = std::exp(-step_seconds / tau);
+    return filter.value = filter.decay * filter.value + (1.0 - filter.decay) * input;
+  }
+  // The input a straight line from u0 to u1 over the step h, read d = lead_seconds_ ahead:
+  // the exact output is a·y0 + (1 - a)·u1 + (u1 - u0)·(a - (1 - a)·(τ - d)/h), a = exp(-h/τ).
+  const double last = filter.input;
+  filter.input = input;
+  if (!(step_seconds > 0)) return filter.value = input;
+  if (step_seconds != filter.step) {
+    filter.step = step_seconds, filter.decay = std::exp(-step_seconds / tau);
+    filter.ramp = filter.decay - (1.0 - filter.decay) * (tau - lead_seconds_) / step_seconds;
+  }
+  return filter.value = filter.decay * filter.value + (1.0 - filter.decay) * input + filter.ramp * (input - last);
 }
 
 namespace {
@@ -305,7 +316,8 @@ bool lags_its_lag(const FeatureAtom& atom) {
 
 }  // namespace
 
-TermEvaluator::TermEvaluator(const std::vector<FeatureTerm>& terms) : terms_(&terms) {
+TermEvaluator::TermEvaluator(const std::vector<FeatureTerm>& terms, InputHold hold, double lead_seconds)
+    : terms_(&terms), hold_(hold), lead_seconds_(lead_seconds) {
   std::vector<const FeatureAtom*>& atoms = atoms_;
   for (const auto& term : terms) {
     for (const auto& factor : term.factors) atoms.push_back(&factor.atom);
@@ -342,9 +354,8 @@ void TermEvaluator::advance(const TermInputs& inputs) {
 double TermEvaluator::first_lag(std::size_t s, double delta_t, double step_seconds, double tau) {
   State& state = states_[s];
   const std::size_t owner = first_owner_[s];
-  state.first = owner == s ? lag(state.first_step, state.first_decay, state.first, delta_t, step_seconds, tau)
-                           : states_[owner].first;
-  return state.first;
+  if (owner == s) return lag(state.first, delta_t, step_seconds, tau);
+  return state.first.value = states_[owner].first.value;
 }
 
 double TermEvaluator::atom_value(const FeatureAtom& atom, std::size_t s, const TermInputs& inputs) {
@@ -356,58 +367,49 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, std::size_t s, const T
     case Kind::delta_t: return delta_t;
     case Kind::rate: return inputs.rate;
     case Kind::lag:
-      first_lag(s, delta_t, step_seconds, atom.tau);
-      return state.first;
+      return first_lag(s, delta_t, step_seconds, atom.tau);
     case Kind::lag_rate:
-      first_lag(s, delta_t, step_seconds, atom.tau);
-      return (delta_t - state.first) / atom.tau * 60.0;
+      return (delta_t - first_lag(s, delta_t, step_seconds, atom.tau)) / atom.tau * 60.0;
     case Kind::gradient_rate: {
-      first_lag(s, delta_t, step_seconds, atom.tau);
-      const double coil_rate = (delta_t - state.first) / atom.tau * 60.0;
-      state.second = lag(state.second_step, state.second_decay, state.second, coil_rate, step_seconds, atom.tau2);
-      return (coil_rate - state.second) / atom.tau2 * 60.0;
+      const double coil_rate = (delta_t - first_lag(s, delta_t, step_seconds, atom.tau)) / atom.tau * 60.0;
+      return (coil_rate - lag(state.second, coil_rate, step_seconds, atom.tau2)) / atom.tau2 * 60.0;
     }
     case Kind::hinge:
-      first_lag(s, delta_t, step_seconds, atom.tau);
-      return std::max(0.0, state.first - atom.level);
+      return std::max(0.0, first_lag(s, delta_t, step_seconds, atom.tau) - atom.level);
     case Kind::lead: return delta_t + atom.tau * inputs.rate / 60.0;
     case Kind::lead_hinge: return std::max(0.0, delta_t + atom.tau * inputs.rate / 60.0 - atom.level);
     case Kind::lag2:
     case Kind::lag2_rate:
     case Kind::node_hinge: {
-      first_lag(s, delta_t, step_seconds, atom.tau);
+      const double first = first_lag(s, delta_t, step_seconds, atom.tau);
+      double second = 0;
       if (atom.tau2 > 0) {
         const std::size_t owner = second_owner_[s];
-        state.second = owner == s ? lag(state.second_step, state.second_decay, state.second, state.first, step_seconds,
-                                        atom.tau2)
-                                  : states_[owner].second;
+        second = owner == s ? lag(state.second, first, step_seconds, atom.tau2)
+                            : (state.second.value = states_[owner].second.value);
       }
-      if (atom.kind == Kind::lag2) return state.second;
-      if (atom.kind == Kind::lag2_rate) return (state.first - state.second) / atom.tau2 * 60.0;
-      const double node = atom.tau2 > 0 ? state.second + atom.zero * (state.first - state.second) / atom.tau2
-                                        : state.first + atom.zero * (delta_t - state.first) / atom.tau;
+      if (atom.kind == Kind::lag2) return second;
+      if (atom.kind == Kind::lag2_rate) return (first - second) / atom.tau2 * 60.0;
+      const double node = atom.tau2 > 0 ? second + atom.zero * (first - second) / atom.tau2
+                                        : first + atom.zero * (delta_t - first) / atom.tau;
       return std::max(0.0, node - atom.level);
     }
     case Kind::play: {
-      first_lag(s, delta_t, step_seconds, atom.tau);
-      if (!(step_seconds > 0)) state.second = state.first;  // equilibrium: nothing to catch up
-      state.second = std::clamp(state.second, state.first - atom.level, state.first + atom.level);
-      return (state.first - state.second) / atom.level;
+      const double first = first_lag(s, delta_t, step_seconds, atom.tau);
+      double& played = state.second.value;
+      if (!(step_seconds > 0)) played = first;  // equilibrium: nothing to catch up
+      played = std::clamp(played, first - atom.level, first + atom.level);
+      return (first - played) / atom.level;
     }
     case Kind::turn_on:
       // 1 at a (re)start, then a lag towards 0: exp(-t/TAU) exactly for any steps.
-      state.first = step_seconds > 0 ? lag(state.first_step, state.first_decay, state.first, 0.0, step_seconds, atom.tau)
-                                     : 1.0;
-      return state.first;
+      return step_seconds > 0 ? lag(state.first, 0.0, step_seconds, atom.tau) : (state.first.value = 1.0);
     case Kind::direction: {
       double source = inputs.rate;
       if (atom.tau2 > 0) {
-        first_lag(s, delta_t, step_seconds, atom.tau2);
-        source = (delta_t - state.first) / atom.tau2 * 60.0;
+        source = (delta_t - first_lag(s, delta_t, step_seconds, atom.tau2)) / atom.tau2 * 60.0;
       }
-      state.second = lag(state.second_step, state.second_decay, state.second,
-                         tanh_by_exp(source / atom.direction_rate_scale()), step_seconds, atom.tau);
-      return state.second;
+      return lag(state.second, tanh_by_exp(source / atom.direction_rate_scale()), step_seconds, atom.tau);
     }
     case Kind::channel_gradient:
     case Kind::channel_gradient_rate: {

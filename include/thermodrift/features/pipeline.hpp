@@ -155,6 +155,9 @@ struct RecordedInputs {
   std::vector<double> channel_means, channel_rates;  // row-major, width() per row
   std::vector<std::size_t> kept;           // rows a (decimated) table keeps
   std::vector<double> target;              // the smoothed gyro at the kept rows: the table's target
+  // sparse_inputs: the median step of the rows it came from (0: every row is here); the
+  // terms are then evaluated with the linear hold, half that step ahead.
+  double dense_step_seconds = 0;
   std::size_t rows() const { return delta_t.size(); }
   // Channel numbers per row: the highest recorded channel + 1.
   std::size_t width() const { return channels.empty() ? 0 : channels.back() + 1; }
@@ -164,6 +167,11 @@ RecordedInputs record_inputs(const Pipeline& pipeline, const ChamberLog& log, st
 // One column per term, one row per kept row. A term reading a channel not recorded is a
 // UsageError.
 Eigen::MatrixXd evaluate_terms(const std::vector<FeatureTerm>& terms, const RecordedInputs& inputs);
+// The rows of `inputs` the terms need, at most `every` rows apart: every kept row, every
+// restart (step 0) and enough rows between them, each with the time since the one before.
+// Its columns are those of the whole log to within how far the smoothed inputs bend over
+// `every` rows, for about 1/`every` of the work.
+RecordedInputs sparse_inputs(const RecordedInputs& inputs, std::size_t every);
 
 // Appends the rows of `more` to `table` (several logs fitted together), with its runs.
 void append_rows(FeatureTable& table, const FeatureTable& more);

@@ -123,11 +123,22 @@ struct TermInputs {
   std::span<const double> channel_rates;
 };
 
+// How a filter's input moves between two samples: held at the newer sample's value (the
+// streaming runtime's rule, exact for a log sampled as it is recorded) or along a straight
+// line from the older to the newer (exact for a piecewise-linear input, so that a smooth
+// input sampled sparsely is filtered as if it had been sampled densely: the feature
+// searches' columns on the decimated rows, sparse_inputs).
+enum class InputHold { step, linear };
+
 // The streaming state of a list of terms: two filter states per factor, no allocation
 // after construction.
 class TermEvaluator {
  public:
-  explicit TermEvaluator(const std::vector<FeatureTerm>& terms);
+  // `lead_seconds`, with the linear hold: the line is read that far ahead of each sample.
+  // Half a dense step makes sparse samples filter as the step hold over the dense ones does
+  // (which leads a ramp by half its step), to within step²/(12·τ) seconds of lag.
+  explicit TermEvaluator(const std::vector<FeatureTerm>& terms, InputHold hold = InputHold::step,
+                         double lead_seconds = 0);
 
   // One sample; writes one value per term. A grad term whose channel is not in the
   // inputs is a UsageError.
@@ -142,22 +153,29 @@ class TermEvaluator {
   }
 
  private:
-  struct State {
-    double first = 0;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG); L1 of lag2; on's value
-    double second = 0;  // G (gradrate), the direction memory (dir), L2 (lag2, lag2rate, nodehinge) or P (play)
-    // exp(-step/τ) of each filter for the last step length: a log of even steps needs one exp
-    // per filter, not one per sample.
-    double first_step = -1, first_decay = 0, second_step = -1, second_decay = 0;
+  // A first-order lag: its output, exp(-step/τ) for the last step length (a log of even
+  // steps needs one exp per filter, not one per sample), and for a linear hold the weight
+  // of the input's change over the step and the last input.
+  struct Filter {
+    double value = 0;
+    double step = -1, decay = 0, ramp = 0;
+    double input = 0;
   };
-  // lag_step with the filter's memoized decay; the same arithmetic, so the same bits.
-  static double lag(double& memo_step, double& memo_decay, double state, double input, double step_seconds,
-                    double tau);
+  struct State {
+    Filter first;   // L, the lag of ΔT (lag, lagrate, gradrate, dir with LAG); L1 of lag2; on's value
+    Filter second;  // G (gradrate), the direction memory (dir), L2 (lag2, lag2rate, nodehinge) or P (play)
+  };
+  // Steps `filter` by one sample of `input` (step 0: equilibrium, the output is the input).
+  // With the step hold, lag_step's arithmetic with the decay memoized: the same bits.
+  double lag(Filter& filter, double input, double step_seconds, double tau) const;
   // Factor s's first filter (the lag of ΔT), stepped by the first factor that has the same
   // one and copied by the others: a node's level, hinges and rate share one filter.
   double first_lag(std::size_t s, double delta_t, double step_seconds, double tau);
   double atom_value(const FeatureAtom& atom, std::size_t s, const TermInputs& inputs);
 
   const std::vector<FeatureTerm>* terms_;
+  InputHold hold_;
+  double lead_seconds_;
   std::vector<State> states_;  // one per factor, in order
   // Per factor: the factor that steps its first filter, and (lag2, lag2rate, nodehinge with
   // a second lag) its second; itself when no earlier factor has the same filter.

@@ -234,6 +234,59 @@ TEST(RecordedInputs, EvaluateToTheColumnsOfBuildFeatureTable) {
   EXPECT_THROW(evaluate_terms({FeatureTerm::parse("grad:3-1")}, record_inputs(own_only, log, 0, 0, true)), UsageError);
 }
 
+// The feature searches score sets on the decimated rows alone (sparse_inputs, the filters
+// fed a straight line between them). Over a log of smooth temperatures with a gap, the
+// sparse rows keep every kept row and every restart, no more than `every` rows apart, and
+// their columns are the whole log's to within a small part of each column's range; the
+// stateless terms exactly.
+TEST(RecordedInputs, SparseRowsGiveTheColumnsOfEveryRow) {
+  Pipeline recording = ramp_pipeline();
+  recording.decimation = 10;
+  recording.terms = {FeatureTerm::parse("dT"), FeatureTerm::parse("grad:2-1")};
+  std::vector<double> time;
+  for (int k = 0; k < 4000; ++k) time.push_back(k);
+  for (int k = 0; k < 3000; ++k) time.push_back(4100 + k);  // a gap: the lags restart
+  ChamberLog log = one_axis_log(time, std::vector<double>(time.size(), 0.0), {});
+  log.temperature_names = {"a", "b"};
+  log.temperature.assign(2, {});
+  for (const double t : time) {
+    log.temperature[0].push_back(20 + 30 * std::sin(2 * M_PI * t / 5000));
+    log.temperature[1].push_back(20 + 28 * std::sin(2 * M_PI * t / 5000 - 0.1));
+  }
+  const RecordedInputs every_row = record_inputs(recording, log, 0, 0, true);
+  const RecordedInputs sparse = sparse_inputs(every_row, 10);
+  ASSERT_EQ(sparse.kept.size(), every_row.kept.size());
+  EXPECT_EQ(sparse.target, every_row.target);
+  EXPECT_LT(sparse.rows(), every_row.rows() / 9);
+  double elapsed = 0, longest = 0;
+  std::size_t restarts = 0;
+  for (std::size_t i = 0; i < sparse.rows(); ++i) {
+    restarts += sparse.step_seconds[i] > 0 ? 0 : 1;
+    elapsed += sparse.step_seconds[i];
+    longest = std::max(longest, sparse.step_seconds[i]);
+  }
+  EXPECT_EQ(restarts, 2u);
+  EXPECT_EQ(longest, 10.0);
+  EXPECT_GE(elapsed, 3999.0 + 2999.0 - 2 * 10);  // up to the last kept row of each run
+  EXPECT_EQ(sparse.dense_step_seconds, 1.0);
+
+  std::vector<FeatureTerm> terms;
+  for (const char* name : {"dT", "rate", "grad:2-1", "lag:30", "lagrate:30", "hinge:600:1.5", "lag2:400:100",
+                           "nodehinge:400:100:0:-1", "nodehinge:30:0:60:2", "play:300:0.5", "dir:400:300",
+                           "gradrate:300:60", "on:300"}) {
+    terms.push_back(FeatureTerm::parse(name));
+  }
+  const Eigen::MatrixXd exact = evaluate_terms(terms, every_row);
+  const Eigen::MatrixXd close = evaluate_terms(terms, sparse);
+  ASSERT_EQ(close.rows(), exact.rows());
+  for (Eigen::Index j = 0; j < exact.cols(); ++j) {
+    const double range = exact.col(j).maxCoeff() - exact.col(j).minCoeff();
+    ASSERT_GT(range, 0) << terms[static_cast<std::size_t>(j)].name();
+    EXPECT_LT((close.col(j) - exact.col(j)).cwiseAbs().maxCoeff(), (j < 3 ? 0.0 : 1e-3) * range + 1e-300)
+        << terms[static_cast<std::size_t>(j)].name();
+  }
+}
+
 TEST(BuildFeatureTable, AppendRowsConcatenates) {
   const Pipeline pipeline = ramp_pipeline();
   std::vector<double> time, gyro, temperature;

@@ -80,6 +80,29 @@ TEST(FeatureTerms, LagIsExactForAStepWhateverTheSampling) {
   }
 }
 
+// With the input held along a straight line between samples, a lag is exact for a ramp
+// at any step: from equilibrium at 0, u = s·t gives L = s·(t - TAU·(1 - exp(-t/TAU))),
+// and the memory's filter and the Shupe term's second lag are lags too. The step hold
+// reads the ramp's later sample over the whole step, so it leads the ramp.
+TEST(FeatureTerms, LinearHoldIsExactForARampWhateverTheSampling) {
+  const double tau = 300, slope = 0.02;  // °C/s
+  const auto terms = parse_all({"lag:300", "lagrate:300"});
+  TermEvaluator linear(terms, InputHold::linear), step(terms);
+  std::vector<double> values(2), stepped(2);
+  linear.push(0, 0, 0, values);
+  step.push(0, 0, 0, stepped);
+  double t = 0;
+  for (const double h : {0.1, 7.0, 33.3, 1.0, 250.0, 0.01, 600.0, 12.0}) {
+    t += h;
+    linear.push(slope * t, 0, h, values);
+    step.push(slope * t, 0, h, stepped);
+    const double expected = slope * (t - tau * (1 - std::exp(-t / tau)));
+    EXPECT_NEAR(values[0], expected, 1e-12) << "t = " << t;
+    EXPECT_NEAR(values[1], (slope * t - expected) / tau * 60, 1e-12) << "t = " << t;
+  }
+  EXPECT_GT(stepped[0] - slope * (t - tau * (1 - std::exp(-t / tau))), 1e-3);
+}
+
 // on:TAU is exp(-t/TAU), t counted from the last (re)start, at any sampling, whatever
 // the temperature does; a step of 0 (a gap) starts it again at 1.
 TEST(FeatureTerms, TurnOnDecaysFromEachRestart) {
