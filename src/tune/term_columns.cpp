@@ -14,7 +14,7 @@
 
 namespace thermodrift {
 
-ColumnCache::ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline) {
+ColumnCache::ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline, bool sparse) {
   // A term reading each other channel, so that every channel's smoothed value and rate is
   // recorded for the grad terms the searches offer.
   Pipeline recording = pipeline;
@@ -31,8 +31,38 @@ ColumnCache::ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, 
       run_start_.push_back(target.size());
     }
     target.insert(target.end(), inputs_.back().target.begin(), inputs_.back().target.end());
+    if (sparse && pipeline.decimation > 1) {
+      sparse_.push_back(sparse_inputs(inputs_.back(), pipeline.decimation));
+      sparse_shortest_ = std::max(sparse_shortest_, kSparseSteps * static_cast<double>(pipeline.decimation) *
+                                                        sparse_.back().dense_step_seconds);
+    }
   }
   target_ = Eigen::Map<const Eigen::VectorXd>(target.data(), static_cast<Eigen::Index>(target.size()));
+}
+
+namespace {
+
+// The columns of `terms` over each log's inputs, end to end.
+Eigen::MatrixXd joined_columns(const std::vector<FeatureTerm>& terms, const std::vector<RecordedInputs>& logs,
+                               Eigen::Index rows) {
+  Eigen::MatrixXd joined(rows, static_cast<Eigen::Index>(terms.size()));
+  if (terms.empty()) return joined;
+  Eigen::Index row = 0;
+  for (const auto& log : logs) {
+    const Eigen::MatrixXd part = evaluate_terms(terms, log);
+    joined.middleRows(row, part.rows()) = part;
+    row += part.rows();
+  }
+  return joined;
+}
+
+}  // namespace
+
+Eigen::MatrixXd ColumnCache::exact_matrix(const std::vector<std::string>& names) {
+  if (sparse_.empty()) return matrix(names);
+  std::vector<FeatureTerm> terms;
+  for (const auto& name : names) terms.push_back(FeatureTerm::parse(name));
+  return joined_columns(terms, inputs_, target_.size());
 }
 
 void ColumnCache::ensure(const std::vector<std::string>& names) {
@@ -60,19 +90,23 @@ void ColumnCache::ensure(const std::vector<std::string>& names) {
     // Their inner products go too (ids are never reused, so none can be found again).
     drop_products();
   }
-  std::vector<Eigen::MatrixXd> parts;
-  for (const auto& log : inputs_) parts.push_back(evaluate_terms(missing, log));
-  for (std::size_t j = 0; j < missing.size(); ++j) {
-    Column& entry = columns_[missing[j].name()];
+  // The terms a sparse cache computes on every row: those with a short time constant.
+  std::vector<FeatureTerm> dense, sparse;
+  for (auto& term : missing) {
+    const auto constants = term.time_constants();
+    const bool short_lag = std::any_of(constants.begin(), constants.end(), [&](double tau) { return tau < sparse_shortest_; });
+    (sparse_.empty() || short_lag ? dense : sparse).push_back(std::move(term));
+  }
+  const Eigen::MatrixXd dense_columns = joined_columns(dense, inputs_, target_.size());
+  const Eigen::MatrixXd sparse_columns = joined_columns(sparse, sparse_, target_.size());
+  for (std::size_t j = 0; j < dense.size() + sparse.size(); ++j) {
+    const bool is_dense = j < dense.size();
+    const auto k = static_cast<Eigen::Index>(is_dense ? j : j - dense.size());
+    Column& entry = columns_[(is_dense ? dense[j] : sparse[static_cast<std::size_t>(k)]).name()];
     entry.last_use = clock_;
     entry.id = next_id_++;
     Eigen::VectorXd& column = entry.values;
-    column.resize(target_.size());
-    Eigen::Index row = 0;
-    for (const auto& part : parts) {
-      column.segment(row, part.rows()) = part.col(static_cast<Eigen::Index>(j));
-      row += part.rows();
-    }
+    column = is_dense ? dense_columns.col(k) : sparse_columns.col(k);
     const double largest = column.size() > 0 ? column.cwiseAbs().maxCoeff() : 0.0;
     entry.scale = largest > 0 ? largest : 1.0;
   }
@@ -186,7 +220,7 @@ LeastSquaresScore least_squares_cv_score(const Eigen::MatrixXd& x, const Eigen::
   const NormalEquations equations(x, y, blocks);
   const Eigen::VectorXd beta = equations.equations.coefficients();
   return {held_out_mse(equations.held_out_predictions(), y, blocks),
-          cancellation(equations.design.rightCols(x.cols()), beta.tail(x.cols()), grouped)};
+          cancellation(equations.design.rightCols(x.cols()), beta.tail(x.cols()), grouped), {}};
 }
 
 void ColumnCache::set_blocks(const std::vector<SampleRange>& blocks) {

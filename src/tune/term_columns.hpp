@@ -66,9 +66,16 @@ struct SegmentedNormalEquations {
 // The ready, decimated samples of every term asked for so far, one column per term name:
 // each new batch of terms is one pass of the terms over the logs' recorded inputs. The time-constant search
 // asks for many columns, so past a byte budget the half used longest ago is dropped.
+//
+// `sparse`: the columns are computed on the decimated rows alone (sparse_inputs, the filters
+// fed a straight line between them), about `decimation` times less work than every row; they
+// differ from the model's own columns by how far the 100 s means bend between decimated rows.
+// Terms with a time constant under kSparseSteps of those rows' steps are computed on every
+// row: a lag that short follows the bends. For a search that scores thousands of sets;
+// `exact_matrix` gives the model's columns.
 class ColumnCache {
  public:
-  ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline);
+  ColumnCache(const std::vector<ChamberLog>& logs, std::size_t axis, const Pipeline& pipeline, bool sparse = false);
 
   const Eigen::VectorXd& target() const { return target_; }
   // The held-out blocks of the searches' cross-validation (cv_blocks).
@@ -84,6 +91,9 @@ class ColumnCache {
     for (std::size_t j = 0; j < names.size(); ++j) x.col(static_cast<Eigen::Index>(j)) = columns_.at(names[j]).values;
     return x;
   }
+  // The named columns computed on every row, as the model computes them (not kept): for a
+  // sparse cache, what its result is fitted and judged on.
+  Eigen::MatrixXd exact_matrix(const std::vector<std::string>& names);
 
   // least_squares_cv_score of the named columns over `blocks`, from their inner products
   // per block: each pair of columns is multiplied once and kept, so a set that adds one
@@ -94,8 +104,11 @@ class ColumnCache {
 
  private:
   static constexpr std::size_t kBudgetBytes = std::size_t{128} << 20;
+  static constexpr double kSparseSteps = 5;
+  double sparse_shortest_ = 0;  // seconds: the shortest time constant computed on sparse rows
   // The terms' inputs over each log, smoothed once (every temperature channel recorded).
   std::vector<RecordedInputs> inputs_;
+  std::vector<RecordedInputs> sparse_;  // sparse_inputs of each, for a sparse cache
   Eigen::VectorXd target_;
   std::vector<std::size_t> run_start_;
   struct Column {

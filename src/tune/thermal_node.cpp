@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <unordered_map>
 
 #include "thermodrift/error.hpp"
 #include "thermodrift/tune/feature_selection.hpp"
@@ -220,7 +222,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   for (const std::size_t channel : channels) {
     Pipeline on_channel = pipeline;
     if (channel != own) on_channel.temperature_channel = channel;
-    caches.emplace_back(logs, axis, on_channel);
+    caches.emplace_back(logs, axis, on_channel, true);
   }
   ColumnCache* cache = &caches.front();
   const Eigen::VectorXd& y = cache->target();
@@ -234,18 +236,26 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   // A set's score: its blocked CV (the geometric mean of the blocks' MSEs, or their pooled
   // MSE: options.cv_score), times (c / max_cancellation)² when its fit cancels c times more.
   const bool typical = options.cv_score == FeatureSelectionOptions::CvScore::geometric;
-  auto penalized = [&](const NodeModel& model, bool by_typical_block) {
-    // The node's level and its hinges are one part: a piecewise-linear map cancels by design.
-    const LeastSquaresScore scored = cache->cv_score(model.terms(), result.held_out.blocks,
-                                                     static_cast<Eigen::Index>(1 + model.knots.size()));
+  auto penalized = [&](const LeastSquaresScore& scored, bool by_typical_block) {
     const double cv = by_typical_block ? scored.typical_block_mse() : scored.cv_mse;
     const double excess = scored.cancellation / options.max_cancellation;
     return excess > 1 ? cv * excess * excess : cv;
   };
+  // The node's level and its hinges are one part: a piecewise-linear map cancels by design.
+  auto grouped = [](const NodeModel& model) { return static_cast<Eigen::Index>(1 + model.knots.size()); };
+  // The search scores sets on the cache's sparse columns ... A set is scored once: the
+  // refinement's pattern search steps back over points it has left, its simplex rounds
+  // vertices onto the same whole seconds, and the members offer the same terms to one node.
+  std::unordered_map<std::string, double> scores;  // by channel and terms
   auto score = [&](const NodeModel& model) {
     options.stop.throw_if_requested("feature identification");
     ++result.candidates_scored;
-    return penalized(model, typical);
+    const std::vector<std::string> names = model.terms();
+    std::string key = std::to_string(cache - caches.data());
+    for (const auto& name : names) key += ' ' + name;
+    const auto [at, fresh] = scores.try_emplace(std::move(key), 0.0);
+    if (fresh) at->second = penalized(cache->cv_score(names, result.held_out.blocks, grouped(model)), typical);
+    return at->second;
   };
   result.start_mse = typical ? cache->cv_score({}, result.held_out.blocks, 0).typical_block_mse()
                              : least_squares_cv(Eigen::MatrixXd(y.size(), 0), y, result.held_out.blocks);
@@ -665,18 +675,27 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     }
   }
   result.terms = names;
+  // ... and what it found is judged and fitted on the model's own columns.
   if (distinct_members == 1) {
-    result.cv_mse = typical ? penalized(kept.front().model, false) : kept.front().cv;  // pooled, as averages are
+    const LeastSquaresScore scored =
+        least_squares_cv_score(cache->exact_matrix(names), y, result.held_out.blocks, grouped(kept.front().model));
+    result.cv_mse = penalized(scored, false);  // pooled, as averages are
     return result;
   }
   Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());
   const double weight = 1.0 / static_cast<double>(kept.size());
+  const Eigen::MatrixXd columns = cache->exact_matrix(names);
+  const auto of = [&](const std::vector<std::string>& set) {
+    std::vector<Eigen::Index> at;
+    for (const auto& name : set) at.push_back(std::find(names.begin(), names.end(), name) - names.begin());
+    return Eigen::MatrixXd(columns(Eigen::all, at));
+  };
   for (const auto& member : kept) {
     result.averaged_sets.push_back(member.terms);
-    held_out += weight * least_squares_cv_predictions(cache->matrix(member.terms), y, result.held_out.blocks);
+    held_out += weight * least_squares_cv_predictions(of(member.terms), y, result.held_out.blocks);
   }
   result.cv_mse = held_out_mse(held_out, y, result.held_out.blocks);
-  result.linear_fit = averaged_least_squares(cache->matrix(names), y, names, result.averaged_sets);
+  result.linear_fit = averaged_least_squares(columns, y, names, result.averaged_sets);
   result.path.push_back({"average", fmt::format("members {} ({} distinct sets), their fits averaged", kept_numbers, distinct_members),
                          result.cv_mse, names});
   return result;

@@ -81,6 +81,40 @@ TEST(ColumnCache, CvScoreFromKeptProductsMatchesTheGramOverAllRows) {
   }
 }
 
+// A sparse cache (the identification's) computes its columns on the decimated rows. Its
+// exact_matrix is the every-row cache's columns bit for bit, terms with a short lag are
+// computed on every row too, and the others and the scores of sets of them stay within a
+// small part of their range of the exact ones.
+TEST(ColumnCache, SparseColumnsStayCloseToTheExactOnes) {
+  const sim::UnitLaw unit = sim::draw_unit(7);
+  const ChamberLog log =
+      sim::to_chamber_log(sim::simulate_unit(unit, sim::draw_profile(sim::ProfileKind::cycle, unit, 7, 1), 7));
+  Pipeline pipeline;
+  pipeline.decimation = 10;
+  ColumnCache exact({log}, 0, pipeline), sparse({log}, 0, pipeline, true);
+  const std::vector<std::string> longer{"lag:600", "hinge:600:-10", "lagrate:600", "rate", "dir:900:600",
+                                        "gradrate:600:300", "play:1200:2", "lag2:900:300", "lag:600*lagrate:600"};
+  const std::vector<std::string> shorter{"lag:30", "lagrate:30", "dir:40:20", "gradrate:600:30"};
+  std::vector<std::string> all = longer;
+  all.insert(all.end(), shorter.begin(), shorter.end());
+  const Eigen::MatrixXd expected = exact.matrix(all);
+  EXPECT_TRUE((sparse.exact_matrix(all).array() == expected.array()).all());
+  EXPECT_TRUE((sparse.matrix(shorter).array() == exact.matrix(shorter).array()).all());
+  const Eigen::MatrixXd close = sparse.matrix(longer);
+  double largest = 0;
+  for (Eigen::Index j = 0; j < close.cols(); ++j) {
+    const double range = expected.col(j).maxCoeff() - expected.col(j).minCoeff();
+    const double error = (close.col(j) - expected.col(j)).cwiseAbs().maxCoeff();
+    EXPECT_LT(error, 1e-3 * range) << all[static_cast<std::size_t>(j)];
+    largest = std::max(largest, error / range);
+  }
+  EXPECT_GT(largest, 0) << "the sparse columns are computed apart";
+  const auto blocks = exact.blocks(10, FoldsBy::time).blocks;
+  const std::vector<std::string> node{"lag:600", "hinge:600:-10", "lagrate:600", "rate", "dir:900:600", "gradrate:600:300"};
+  const double got = sparse.cv_score(node, blocks, 2).cv_mse, want = exact.cv_score(node, blocks, 2).cv_mse;
+  EXPECT_NEAR(got, want, 1e-3 * want);
+}
+
 // A column that is zero outside one block (a hinge only the hottest block reaches): the
 // fold that holds that block out knows nothing of it, and predicts the block exactly as
 // the set without it does. (Before the normal equations were kept per block, a fold's
