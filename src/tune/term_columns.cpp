@@ -97,19 +97,20 @@ void ColumnCache::ensure(const std::vector<std::string>& names) {
     const bool short_lag = std::any_of(constants.begin(), constants.end(), [&](double tau) { return tau < sparse_shortest_; });
     (sparse_.empty() || short_lag ? dense : sparse).push_back(std::move(term));
   }
-  const Eigen::MatrixXd dense_columns = joined_columns(dense, inputs_, target_.size());
-  const Eigen::MatrixXd sparse_columns = joined_columns(sparse, sparse_, target_.size());
-  for (std::size_t j = 0; j < dense.size() + sparse.size(); ++j) {
-    const bool is_dense = j < dense.size();
-    const auto k = static_cast<Eigen::Index>(is_dense ? j : j - dense.size());
-    Column& entry = columns_[(is_dense ? dense[j] : sparse[static_cast<std::size_t>(k)]).name()];
-    entry.last_use = clock_;
-    entry.id = next_id_++;
-    Eigen::VectorXd& column = entry.values;
-    column = is_dense ? dense_columns.col(k) : sparse_columns.col(k);
-    const double largest = column.size() > 0 ? column.cwiseAbs().maxCoeff() : 0.0;
-    entry.scale = largest > 0 ? largest : 1.0;
-  }
+  // Each batch evaluated over its inputs, its columns kept under their names.
+  const auto keep = [&](const std::vector<FeatureTerm>& terms, const std::vector<RecordedInputs>& over) {
+    const Eigen::MatrixXd joined = joined_columns(terms, over, target_.size());
+    for (std::size_t j = 0; j < terms.size(); ++j) {
+      Column& entry = columns_[terms[j].name()];
+      entry.last_use = clock_;
+      entry.id = next_id_++;
+      entry.values = joined.col(static_cast<Eigen::Index>(j));
+      const double largest = entry.values.size() > 0 ? entry.values.cwiseAbs().maxCoeff() : 0.0;
+      entry.scale = largest > 0 ? largest : 1.0;
+    }
+  };
+  keep(dense, inputs_);
+  keep(sparse, sparse_);
 }
 
 namespace {
