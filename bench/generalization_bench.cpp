@@ -8,7 +8,8 @@
 //                                  [--without turn-on,self-heating]
 //                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
-//                                  [--cv-score geometric|pooled]
+//                                  [--cv-score geometric|pooled] [--training-noise K]
+//                                  [--bag B]
 //                                  [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
@@ -24,7 +25,12 @@
 // so only the coefficients come from the training log. --sensor coil (a diagnostic) puts
 // every thermometer on its own coil; --without leaves the turn-on transient or the
 // self-heating out of every unit; --oracle-without NAME,... leaves regressors out of the
-// oracle. docs/generalization.md says what the methods are and
+// oracle. --training-noise K (K > 0) trains on cycle 1 of the same unit and programme with
+// another noise realization (the tests keep theirs): how much a law's figures move when
+// its training data are drawn again. --bag B (a diagnostic) fits B models on B noise draws
+// (K, K+1, ...) and judges the average of their predictions: what the training noise costs,
+// as if the user had B recordings of the same programme (fit times are the first model's).
+// docs/generalization.md says what the methods are and
 // has measured figures.
 #include <time.h>
 
@@ -107,6 +113,8 @@ struct Arguments {
   double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
   bool node_under_dynamics = FeatureSelectionOptions{}.node_under_dynamics;  // --node-under-dynamics on|off
   FeatureSelectionOptions::CvScore cv_score = FeatureSelectionOptions{}.cv_score;  // --cv-score geometric|pooled
+  std::uint64_t training_noise = 0;  // --training-noise K: 0 the training run's own noise, K > 0 another draw
+  std::size_t bag = 1;  // --bag B: B models on B noise draws of the training cycle, their predictions averaged
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -138,6 +146,8 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--json") args.json = value;
     else if (flag == "--rate-span") args.rate_span = std::stod(value);
     else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
+    else if (flag == "--training-noise") args.training_noise = std::stoull(value);
+    else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
     else if (flag == "--cv-score" && (value == "geometric" || value == "pooled")) {
       args.cv_score = value == "pooled" ? FeatureSelectionOptions::CvScore::pooled : FeatureSelectionOptions::CvScore::geometric;
@@ -337,6 +347,30 @@ sim::ProfileKind second_training_profile(std::uint64_t law_seed) {
   return left[engine() % left.size()];
 }
 
+// The rows of a test an axis is judged on (as evaluate and evaluate_from judge them), with
+// the smoothed gyro and the model's prediction there.
+struct JudgedRows {
+  std::vector<std::size_t> row;
+  Eigen::VectorXd target, predicted;
+};
+JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t axis) {
+  const auto& axis_model = model.axes[axis];
+  const auto channel = temperature_channel_per_axis(test.log).at(axis);
+  const FeatureTable table = build_feature_table(axis_model.pipeline, test.log, axis, channel, false);
+  std::vector<Eigen::Index> kept;
+  JudgedRows judged;
+  for (std::size_t i = 0; i < table.rows(); ++i) {
+    const bool settled =
+        test.carried_from_row ? table.row[i] >= *test.carried_from_row : table.since_start[i] >= settle_s;
+    if (!settled) continue;
+    kept.push_back(static_cast<Eigen::Index>(i));
+    judged.row.push_back(table.row[i]);
+  }
+  judged.target = table.target(kept);
+  judged.predicted = axis_model.predict(table.features(kept, Eigen::all));
+  return judged;
+}
+
 // What `thermodrift fit --model M [--features auto]` asks of calibrate (apps/thermodrift/fit.cpp
 // with its defaults: C 100, σ 1, ε 0.01, tolerance 1e-3; AFSA, blocked 5-fold CV, seed 1),
 // with one tuning thread so that a law's cost is one thread's.
@@ -388,7 +422,14 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   const sim::ChamberRun training_run = sim::simulate_unit(unit, training_programme, sim::derive_seed(seed, 1));
   const sim::LawRegressors training_regressors = regressors_of(training_programme);
   const std::size_t second_cycle = training_run.cycle_start_rows().at(1);
-  const sim::ChamberRun first = slice(training_run, 0, second_cycle);
+  // --training-noise K: cycle 1 of the same programme with another noise draw (ARW, bias
+  // instability, thermometer noise); the next cycle is still judged on the run above.
+  const auto training_draw = [&](std::uint64_t draw) {
+    return draw == 0 ? slice(training_run, 0, second_cycle)
+                     : slice(sim::simulate_unit(unit, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw)),
+                             0, second_cycle);
+  };
+  const sim::ChamberRun first = training_draw(args.training_noise);
   const sim::LawRegressors first_regressors = oracle ? slice(training_regressors, 0, second_cycle) : sim::LawRegressors{};
   std::vector<ChamberLog> training{sim::to_chamber_log(first)};
   std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>> oracle_training{{&first, &first_regressors}};
@@ -453,6 +494,14 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       const Stopwatch fit_clock;
       const Calibration calibration = calibrate(training, LogSpec{}, options);
       result.fit = fit_clock.elapsed();
+      // --bag B: B - 1 more models on other noise draws of the training cycle.
+      std::vector<DriftModel> bagged;
+      for (std::size_t b = 1; b < args.bag && !interrupted.load(); ++b) {
+        std::vector<ChamberLog> resampled{sim::to_chamber_log(training_draw(args.training_noise + b))};
+        CalibrationOptions draw_options = options;
+        if (chooses_features(options)) draw_options.selections = select_features_per_axis(resampled, options);
+        bagged.push_back(calibrate(resampled, LogSpec{}, draw_options).model);
+      }
       for (std::size_t a = 0; a < 3; ++a) {
         result.in_sample[a] = calibration.axes[a].in_sample.mse_after / training_floor[a];
         result.terms[a] = calibration.model.axes[a].pipeline.term_names();
@@ -474,8 +523,20 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
         }
       }
       for (const auto& test : tests) {
-        const auto metrics = test.carried_from_row ? evaluate_from(calibration.model, test.log, *test.carried_from_row)
-                                                   : evaluate(calibration.model, {test.log}, settle_s);
+        auto metrics = test.carried_from_row ? evaluate_from(calibration.model, test.log, *test.carried_from_row)
+                                             : evaluate(calibration.model, {test.log}, settle_s);
+        if (!bagged.empty()) {
+          for (std::size_t a = 0; a < 3; ++a) {
+            JudgedRows mean = judge_axis(calibration.model, test, a);
+            for (const auto& model : bagged) {
+              const JudgedRows other = judge_axis(model, test, a);
+              if (other.row != mean.row) throw std::runtime_error("bagged models judge different rows");
+              mean.predicted += other.predicted;
+            }
+            mean.predicted /= static_cast<double>(bagged.size() + 1);
+            metrics[a].mse_after = (mean.target - mean.predicted).squaredNorm() / static_cast<double>(mean.row.size());
+          }
+        }
         TestResult judged;
         for (std::size_t a = 0; a < 3; ++a) {
           judged.mse[a] = metrics[a].mse_after;
@@ -556,6 +617,8 @@ int main(int argc, char** argv) {
                           {"smoothing_s", smoothing_s},
                           {"evaluations", args.evaluations},
                           {"training", args.two_runs ? "two-runs" : "cycle"},
+                          {"training_noise", args.training_noise},
+                          {"bag", args.bag},
                           {"folds_by", to_string(args.folds_by)},
                           {"interrupted", stopped},
                           {"laws", laws_json(done)}};
