@@ -539,7 +539,8 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       if (!(chosen_cv < std::pow(keep, static_cast<double>(added)) * best_cv)) break;
       std::string names;
       for (std::size_t i = best.dynamics.size(); i < chosen.dynamics.size(); ++i) {
-        names += (names.empty() ? "" : ",") + chosen.dynamics[i].name(chosen.names());
+        if (!names.empty()) names += ',';  // (not "," + name: GCC 12 warns -Wrestrict on it)
+        names += chosen.dynamics[i].name(chosen.names());
       }
       best = std::move(chosen), best_cv = chosen_cv;
       result.path.push_back({"add", names, best_cv, best.terms()});
