@@ -8,7 +8,7 @@
 //                                  [--without turn-on,self-heating]
 //                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
-//                                  [--cv-score geometric|pooled] [--training-noise K]
+//                                  [--cv-score geometric|pooled] [--min-gain X] [--training-noise K]
 //                                  [--bag B]
 //                                  [--json FILE]
 //
@@ -113,6 +113,7 @@ struct Arguments {
   double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
   bool node_under_dynamics = FeatureSelectionOptions{}.node_under_dynamics;  // --node-under-dynamics on|off
   FeatureSelectionOptions::CvScore cv_score = FeatureSelectionOptions{}.cv_score;  // --cv-score geometric|pooled
+  double min_gain = FeatureSelectionOptions{}.min_gain;  // --min-gain: the searches' penalty per term (the kernel check takes it too)
   std::uint64_t training_noise = 0;  // --training-noise K: 0 the training run's own noise, K > 0 another draw
   std::size_t bag = 1;  // --bag B: B models on B noise draws of the training cycle, their predictions averaged
 };
@@ -146,6 +147,7 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--json") args.json = value;
     else if (flag == "--rate-span") args.rate_span = std::stod(value);
     else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
+    else if (flag == "--min-gain") args.min_gain = std::stod(value);
     else if (flag == "--training-noise") args.training_noise = std::stoull(value);
     else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
@@ -480,6 +482,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       options.selection.max_cancellation = args.max_cancellation;
       options.selection.node_under_dynamics = args.node_under_dynamics;
       options.selection.cv_score = args.cv_score;
+      options.selection.min_gain = args.min_gain;
       options.folds_by = args.folds_by;
       if (args.rate_span && method != Method::paper) options.rate_span_seconds = args.rate_span;
       if (chooses_features(options)) {
