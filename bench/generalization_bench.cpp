@@ -500,7 +500,8 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       // --bag B: B - 1 more models on other noise draws of the training cycle.
       std::vector<DriftModel> bagged;
       for (std::size_t b = 1; b < args.bag && !interrupted.load(); ++b) {
-        std::vector<ChamberLog> resampled{sim::to_chamber_log(training_draw(args.training_noise + b))};
+        std::vector<ChamberLog> resampled = training;  // with --training two-runs, the second run too
+        resampled.front() = sim::to_chamber_log(training_draw(args.training_noise + b));
         CalibrationOptions draw_options = options;
         if (chooses_features(options)) draw_options.selections = select_features_per_axis(resampled, options);
         bagged.push_back(calibrate(resampled, LogSpec{}, draw_options).model);
