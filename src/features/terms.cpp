@@ -354,8 +354,7 @@ void TermEvaluator::advance(const TermInputs& inputs) {
 double TermEvaluator::first_lag(std::size_t s, double delta_t, double step_seconds, double tau) {
   State& state = states_[s];
   const std::size_t owner = first_owner_[s];
-  if (owner == s) return lag(state.first, delta_t, step_seconds, tau);
-  return state.first.value = states_[owner].first.value;
+  return owner == s ? lag(state.first, delta_t, step_seconds, tau) : states_[owner].first.value;
 }
 
 double TermEvaluator::atom_value(const FeatureAtom& atom, std::size_t s, const TermInputs& inputs) {
@@ -385,8 +384,7 @@ double TermEvaluator::atom_value(const FeatureAtom& atom, std::size_t s, const T
       double second = 0;
       if (atom.tau2 > 0) {
         const std::size_t owner = second_owner_[s];
-        second = owner == s ? lag(state.second, first, step_seconds, atom.tau2)
-                            : (state.second.value = states_[owner].second.value);
+        second = owner == s ? lag(state.second, first, step_seconds, atom.tau2) : states_[owner].second.value;
       }
       if (atom.kind == Kind::lag2) return second;
       if (atom.kind == Kind::lag2_rate) return (first - second) / atom.tau2 * 60.0;
