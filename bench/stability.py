@@ -16,6 +16,7 @@ diagnostic is left out, as in the summary table's groups. docs/generalization.md
 import argparse
 import json
 import math
+import statistics
 import sys
 
 
@@ -36,8 +37,8 @@ def ratios(path, method):
 
 
 def quantile(values, p):
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, max(0, math.ceil(p * len(ordered)) - 1))]
+    """Type 7 (linear between order statistics), as generalization_bench's tables."""
+    return statistics.quantiles(values, n=100, method="inclusive")[round(p * 100) - 1]
 
 
 def main():
