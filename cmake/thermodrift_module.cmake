@@ -34,7 +34,7 @@ function(thermodrift_test_folder name folder)
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE
     THERMODRIFT_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
-    THERMODRIFT_SHARED_DATA="${PROJECT_SOURCE_DIR}/../shared/data"
+    THERMODRIFT_SHARED_DATA="${THERMODRIFT_SHARED_DATA}"
     THERMODRIFT_BINARY="$<TARGET_FILE:thermodrift_cli>")
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}" COST ${ARG_COST})
 endfunction()

@@ -9,6 +9,7 @@
 
 #include <Eigen/Dense>
 
+#include "../support/shared_data.hpp"
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/sim/simulator.hpp"
 #include "thermodrift/tune/calibration.hpp"
@@ -89,12 +90,13 @@ TEST(LinearAcceptance, DecimatedFitIsTheClosedFormOnTheKeptSamples) {
 }
 
 TEST(Bmi270Acceptance, LinearFitOverBothLogsShowsTheBiasSlope) {
+  THERMODRIFT_SKIP_WITHOUT_SHARED_DATA("real/bmi270");
   LogSpec spec;
   spec.rate_hz = 50;
   spec.temperature_columns = {"1"};
   spec.gyro_columns = {"5", "6", "7"};
   spec.gyro_unit = GyroUnit::dps;
-  const std::string folder = std::string(THERMODRIFT_SHARED_DATA) + "/real/bmi270/";
+  const std::string folder = testing::shared_data("real/bmi270/");
   const std::vector<ChamberLog> logs = {read_chamber_log(folder + "cold.csv", spec),
                                         read_chamber_log(folder + "hot.csv", spec)};
   CalibrationOptions options;

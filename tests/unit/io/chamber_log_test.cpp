@@ -8,6 +8,7 @@
 #include <numbers>
 #include <string>
 
+#include "../../support/shared_data.hpp"
 #include "../../support/temp_dir.hpp"
 #include "thermodrift/error.hpp"
 
@@ -380,7 +381,7 @@ LogSpec bmi270_spec() {
   return spec;
 }
 
-std::string bmi270(const std::string& name) { return std::string(THERMODRIFT_SHARED_DATA) + "/real/bmi270/" + name; }
+std::string bmi270(const std::string& name) { return testing::shared_data("real/bmi270/" + name); }
 
 bool any_warning(const ChamberLog& log, const std::string& part) {
   for (const auto& warning : log.warnings) {
@@ -390,6 +391,7 @@ bool any_warning(const ChamberLog& log, const std::string& part) {
 }
 
 TEST(Bmi270, ColdLogLoadsWithBannerGarbledRowAndCutShortLastRow) {
+  THERMODRIFT_SKIP_WITHOUT_SHARED_DATA("real/bmi270");
   const ChamberLog log = read_chamber_log(bmi270("cold.csv"), bmi270_spec());
   // 3258 lines: banner, 3255 rows, "-0.3-0.31" on line 9, a lone "1" at the end.
   EXPECT_EQ(log.rows(), 3255u);
@@ -410,6 +412,7 @@ TEST(Bmi270, ColdLogLoadsWithBannerGarbledRowAndCutShortLastRow) {
 }
 
 TEST(Bmi270, HotLogLoadsWithBannerCutShortFirstAndLastRowsAndAGarbledRow) {
+  THERMODRIFT_SKIP_WITHOUT_SHARED_DATA("real/bmi270");
   const ChamberLog log = read_chamber_log(bmi270("hot.csv"), bmi270_spec());
   // 6537 lines: banner, a 6-field first row, an 8-field row on line 13, a lone "4" at the end.
   EXPECT_EQ(log.rows(), 6533u);
@@ -430,6 +433,7 @@ TEST(Bmi270, HotLogLoadsWithBannerCutShortFirstAndLastRowsAndAGarbledRow) {
 }
 
 TEST(Bmi270, StrictReadingRefusesTheGarbledRow) {
+  THERMODRIFT_SKIP_WITHOUT_SHARED_DATA("real/bmi270");
   LogSpec spec = bmi270_spec();
   spec.csv.garbled_per_thousand = 0;
   const auto error = log_error(bmi270("cold.csv"), spec);
