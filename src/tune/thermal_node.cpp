@@ -93,7 +93,9 @@ struct Constant {
   double* value;
   double resolution = 1;
   double low = 0, high = 0;
-  double rounded(double v) const { return std::round(v / resolution) * resolution; }
+  // Divided by the steps per unit, not multiplied by the step: 230 · 0.01 is
+  // 2.3000000000000003, 230 / 100 is 2.3, the constant the model file then names.
+  double rounded(double v) const { return std::round(v / resolution) / (1.0 / resolution); }
   bool inside() const { return *value >= low && *value <= high; }
 };
 

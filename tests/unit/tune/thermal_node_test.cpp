@@ -65,6 +65,24 @@ sim::UnitLaw known_unit() {
 }
 
 // The delay of the identified node behind the sensor at low frequency, s: T1 + T2 - TL.
+// The decimals a term name writes its constants with, at most (knots 0.1 °C, play widths
+// 0.01 °C, memory rate scales 0.01 °C/min, time constants whole seconds): a name such as
+// play:29:2.3000000000000003 prints the rounding of a product, not the constant chosen.
+std::size_t most_decimals(const std::string& name) {
+  std::size_t most = 0, digits = 0;
+  bool after_point = false;
+  for (const char c : name) {
+    if (c == '.') {
+      after_point = true, digits = 0;
+    } else if (c >= '0' && c <= '9') {
+      if (after_point) most = std::max(most, ++digits);
+    } else {
+      after_point = false;
+    }
+  }
+  return most;
+}
+
 double node_delay(const Pipeline& pipeline) {
   double lags = 0, lead = 0;
   for (const auto& term : pipeline.terms) {
@@ -201,6 +219,9 @@ TEST(ThermalNode, RecoversTheNodeItsMemoryAndItsPlayAndPredictsTheNextCycle) {
   ASSERT_TRUE(has_atom(calibration.model.axes[2].pipeline, FeatureAtom::Kind::play, &width));
   EXPECT_GT(width, 1.0);
   EXPECT_LT(width, 4.0);
+  for (const auto& axis : calibration.model.axes) {
+    for (const auto& name : axis.pipeline.term_names()) EXPECT_LE(most_decimals(name), 2u) << name;
+  }
 }
 
 // Thermometers swapped between blocks: x's own sits on y's far node (a 1600 s node behind
