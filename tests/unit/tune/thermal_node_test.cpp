@@ -64,7 +64,6 @@ sim::UnitLaw known_unit() {
   return unit;
 }
 
-// The delay of the identified node behind the sensor at low frequency, s: T1 + T2 - TL.
 // The decimals a term name writes its constants with, at most (knots 0.1 °C, play widths
 // 0.01 °C, memory rate scales 0.01 °C/min, time constants whole seconds): a name such as
 // play:29:2.3000000000000003 prints the rounding of a product, not the constant chosen.
@@ -83,6 +82,7 @@ std::size_t most_decimals(const std::string& name) {
   return most;
 }
 
+// The delay of the identified node behind the sensor at low frequency, s: T1 + T2 - TL.
 double node_delay(const Pipeline& pipeline) {
   double lags = 0, lead = 0;
   for (const auto& term : pipeline.terms) {
