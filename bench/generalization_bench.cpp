@@ -3,7 +3,8 @@
 //
 //   build/bin/generalization_bench [--seeds acceptance|development|S,S,...] [--limit N]
 //                                  [--methods paper,linear,stepwise,svr,oracle] [--threads N]
-//                                  [--evaluations N] [--training cycle|two-runs]
+//                                  [--evaluations N] [--identify greedy|thermal-node]
+//                                  [--training cycle|two-runs]
 //                                  [--folds-by time|runs] [--sensor drawn|coil]
 //                                  [--without turn-on,self-heating]
 //                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any]
@@ -134,9 +135,14 @@ Arguments parse(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
     if (i + 1 >= argc) {
-      fmt::print(stderr, "usage: {} [--seeds acceptance|development|S,S,...] [--limit N] [--methods "
-                         "paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] [--identify greedy|thermal-node] "
-                         "[--training cycle|two-runs] [--folds-by time|runs] [--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] [--json FILE]\n", argv[0]);
+      fmt::print(stderr,
+                 "usage: {} [--seeds acceptance|development|S,S,...] [--limit N] "
+                 "[--methods paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] "
+                 "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
+                 "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
+                 "[--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
+                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--json FILE]\n",
+                 argv[0]);
       std::exit(2);
     }
     const std::string value = argv[++i];
