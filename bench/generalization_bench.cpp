@@ -7,10 +7,11 @@
 //                                  [--training cycle|two-runs]
 //                                  [--folds-by time|runs] [--sensor drawn|coil]
 //                                  [--without turn-on,self-heating]
-//                                  [--oracle-without NAME,...] [--rate-span S] [--node-channel own|any]
+//                                  [--oracle-without NAME,...] [--oracle-target gyro|drift]
+//                                  [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
 //                                  [--cv-score geometric|pooled] [--min-gain X] [--training-noise K]
-//                                  [--bag B]
+//                                  [--bag B] [--training-quiet bias|all]
 //                                  [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
@@ -31,6 +32,11 @@
 // its training data are drawn again. --bag B (a diagnostic) fits B models on B noise draws
 // (K, K+1, ...) and judges the average of their predictions: what the training noise costs,
 // as if the user had B recordings of the same programme (fit times are the first model's).
+// --oracle-target drift fits and judges the oracle on the noise-free drift (with
+// --oracle-without: how far one law's aliases are from it); --training-quiet bias|all
+// trains on the cycle simulated again without the bias instability or any noise. The JSON
+// gives every test's `distance`, the MSE against the smoothed true drift over the floor,
+// and every axis' `training_distance`, the same on the training rows.
 // docs/generalization.md says what the methods are and
 // has measured figures.
 #include <time.h>
@@ -109,6 +115,7 @@ struct Arguments {
   bool without_turn_on = false;
   bool without_self_heating = false;
   std::vector<std::size_t> oracle_without;  // regressors the oracle leaves out (sim::law_regressor_names)
+  bool oracle_on_drift = false;  // --oracle-target drift: the oracle fits and is judged on the true drift
   std::optional<double> rate_span;          // --rate-span of the --features auto methods (fit's default if absent)
   bool other_channels = FeatureSelectionOptions{}.other_channels;  // --node-channel any|own
   double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
@@ -117,6 +124,9 @@ struct Arguments {
   double min_gain = FeatureSelectionOptions{}.min_gain;  // --min-gain: the searches' penalty per term (the kernel check takes it too)
   std::uint64_t training_noise = 0;  // --training-noise K: 0 the training run's own noise, K > 0 another draw
   std::size_t bag = 1;  // --bag B: B models on B noise draws of the training cycle, their predictions averaged
+  // --training-quiet bias|all (a diagnostic): the training cycle simulated again without the
+  // bias instability, or without any noise (the tests keep theirs): what the noise costs.
+  std::string training_quiet;
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -140,8 +150,8 @@ Arguments parse(int argc, char** argv) {
                  "[--methods paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] "
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
-                 "[--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
-                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--json FILE]\n",
+                 "[--oracle-target gyro|drift] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
+                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--training-quiet bias|all] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
     }
@@ -155,6 +165,7 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
     else if (flag == "--min-gain") args.min_gain = std::stod(value);
     else if (flag == "--training-noise") args.training_noise = std::stoull(value);
+    else if (flag == "--training-quiet" && (value == "bias" || value == "all")) args.training_quiet = value;
     else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
     else if (flag == "--cv-score" && (value == "geometric" || value == "pooled")) {
@@ -175,6 +186,7 @@ Arguments parse(int argc, char** argv) {
         else throw std::invalid_argument(fmt::format("unknown physics '{}' (turn-on, self-heating)", name));
       }
     }
+    else if (flag == "--oracle-target" && (value == "gyro" || value == "drift")) args.oracle_on_drift = value == "drift";
     else if (flag == "--oracle-without") {
       const auto names = sim::law_regressor_names();
       for (const auto& name : split(value)) {
@@ -253,14 +265,17 @@ std::vector<double> smoothed(const std::vector<double>& column, double rate_hz) 
   return out;
 }
 
-// One axis of a run as the oracle sees it: smoothed regressors (columns) and gyro.
+// One axis of a run as the oracle sees it: smoothed regressors (columns) and gyro (or, with
+// `on_drift`, the true drift without its noise).
 struct OracleRows {
   Eigen::MatrixXd x;
   Eigen::VectorXd y;
 };
 
-OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& regressors, std::size_t axis) {
-  const std::vector<double> y = smoothed(run.column(sim::gyro_columns[axis]), run.rate_hz);
+OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& regressors, std::size_t axis,
+                       bool on_drift) {
+  const std::vector<double> y =
+      smoothed(run.column(on_drift ? sim::drift_columns[axis] : sim::gyro_columns[axis]), run.rate_hz);
   OracleRows rows{Eigen::MatrixXd(static_cast<Eigen::Index>(y.size()), sim::kLawRegressors),
                   Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()))};
   for (std::size_t j = 0; j < sim::kLawRegressors; ++j) {
@@ -275,9 +290,15 @@ OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& reg
 // leaves held out is what the training log cannot tell apart (near-collinear terms under
 // its one ramp rate) plus the noise, so it bounds what any method could reach from that log.
 // `without`: regressors left out (--oracle-without), to see which physics a method must capture.
+// `on_drift` (--oracle-target drift): fitted on the smoothed true drift and judged against it,
+// noise-free. With `without`, that measures aliases: the law B the remaining regressors make
+// of law A on A's training log. The in-sample ratio is then how far apart the two units'
+// training logs are (in floors, before noise), a test's ratio how far apart their drift is
+// there. Where the first is within what the noise hides and the second is large, no method
+// trained on that log can be near the floor on both units.
 MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>>& training,
                         const std::array<double, 3>& training_floor, const std::vector<TestLog>& tests,
-                        const std::vector<std::size_t>& without) {
+                        const std::vector<std::size_t>& without, bool on_drift) {
   MethodResult result;
   result.method = Method::oracle;
   const Stopwatch clock;
@@ -286,7 +307,7 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
     std::vector<OracleRows> parts;
     Eigen::Index n = 0;
     for (const auto& [run, regressors] : training) {
-      parts.push_back(oracle_rows(*run, *regressors, a));
+      parts.push_back(oracle_rows(*run, *regressors, a, on_drift));
       n += parts.back().y.size();
     }
     Eigen::MatrixXd x(n, sim::kLawRegressors);
@@ -309,11 +330,21 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
     qr.setThreshold(1e-12);
     const Eigen::VectorXd beta = scale.cwiseInverse().asDiagonal() * Eigen::VectorXd(qr.solve(y));
     result.in_sample[a] = (y - x * beta).squaredNorm() / static_cast<double>(n) / training_floor[a];
+    {
+      double sum = 0;
+      Eigen::Index rows = 0;
+      for (const auto& [run, regressors] : training) {
+        const OracleRows truth = oracle_rows(*run, *regressors, a, true);
+        sum += (truth.y - truth.x * beta).squaredNorm();
+        rows += truth.y.size();
+      }
+      result.training_distance[a] = sum / static_cast<double>(rows) / training_floor[a];
+    }
     for (std::size_t j = 0; j < sim::kLawRegressors; ++j) {
       if (beta[static_cast<Eigen::Index>(j)] != 0) result.terms[a].emplace_back(sim::law_regressor_names()[j]);
     }
     for (std::size_t t = 0; t < tests.size(); ++t) {
-      const OracleRows judged = oracle_rows(tests[t].run, tests[t].regressors, a);
+      const OracleRows judged = oracle_rows(tests[t].run, tests[t].regressors, a, on_drift);
       // Judged from settle_s on, as the models are (the carried test: from its own row).
       const std::size_t window = static_cast<std::size_t>(std::llround(smoothing_s * tests[t].run.rate_hz));
       const std::size_t first_input_row =
@@ -321,6 +352,10 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
                                     : static_cast<std::size_t>(std::llround(settle_s * tests[t].run.rate_hz));
       const auto first = static_cast<Eigen::Index>(first_input_row - (window - 1));
       const Eigen::VectorXd residual = (judged.y - judged.x * beta).tail(judged.y.size() - first);
+      const OracleRows truth = oracle_rows(tests[t].run, tests[t].regressors, a, true);
+      result.tests[t].distance[a] =
+          (truth.y - truth.x * beta).tail(truth.y.size() - first).squaredNorm() /
+          static_cast<double>(truth.y.size() - first) / tests[t].floor[a];
       result.tests[t].mse[a] = residual.squaredNorm() / static_cast<double>(residual.size());
       result.tests[t].floor[a] = tests[t].floor[a];
       result.tests[t].ratio[a] = result.tests[t].mse[a] / tests[t].floor[a];
@@ -361,7 +396,7 @@ struct JudgedRows {
   std::vector<std::size_t> row;
   Eigen::VectorXd target, predicted;
 };
-JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t axis) {
+JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t axis, double settle = settle_s) {
   const auto& axis_model = model.axes[axis];
   const auto channel = temperature_channel_per_axis(test.log).at(axis);
   const FeatureTable table = build_feature_table(axis_model.pipeline, test.log, axis, channel, false);
@@ -369,7 +404,7 @@ JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t 
   JudgedRows judged;
   for (std::size_t i = 0; i < table.rows(); ++i) {
     const bool settled =
-        test.carried_from_row ? table.row[i] >= *test.carried_from_row : table.since_start[i] >= settle_s;
+        test.carried_from_row ? table.row[i] >= *test.carried_from_row : table.since_start[i] >= settle;
     if (!settled) continue;
     kept.push_back(static_cast<Eigen::Index>(i));
     judged.row.push_back(table.row[i]);
@@ -377,6 +412,18 @@ JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t 
   judged.target = table.target(kept);
   judged.predicted = axis_model.predict(table.features(kept, Eigen::all));
   return judged;
+}
+
+// MSE of the judged rows' prediction against the unit's smoothed true drift (no noise).
+double drift_mse(const JudgedRows& judged, const sim::ChamberRun& run, std::size_t axis) {
+  const std::vector<double> drift = smoothed(run.column(sim::drift_columns[axis]), run.rate_hz);
+  const auto window = static_cast<std::size_t>(std::llround(smoothing_s * run.rate_hz));
+  double sum = 0;
+  for (std::size_t i = 0; i < judged.row.size(); ++i) {
+    const double error = judged.predicted[static_cast<Eigen::Index>(i)] - drift.at(judged.row[i] - (window - 1));
+    sum += error * error;
+  }
+  return sum / static_cast<double>(judged.row.size());
 }
 
 // What `thermodrift fit --model M [--features auto]` asks of calibrate (apps/thermodrift/fit.cpp
@@ -433,6 +480,18 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   // --training-noise K: cycle 1 of the same programme with another noise draw (ARW, bias
   // instability, thermometer noise); the next cycle is still judged on the run above.
   const auto training_draw = [&](std::uint64_t draw) {
+    if (!args.training_quiet.empty()) {
+      sim::UnitLaw quiet = unit;
+      quiet.noise.bias_instability = 0;
+      if (args.training_quiet == "all") {
+        quiet.noise.angle_random_walk = 1e-9;  // a floor above zero for the in-sample ratio
+        quiet.noise.quantization_arcsec = 0;
+        quiet.noise.temperature_noise_c = 0;
+        quiet.noise.temperature_resolution_c = 0;
+      }
+      return slice(sim::simulate_unit(quiet, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw)), 0,
+                   second_cycle);
+    }
     return draw == 0 ? slice(training_run, 0, second_cycle)
                      : slice(sim::simulate_unit(unit, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw)),
                              0, second_cycle);
@@ -451,6 +510,8 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     oracle_training.emplace_back(&second_run, &second_regressors);
   }
   const std::array<double, 3> training_floor = first.noise_floor(smoothing_s);
+  law.training_floor = training_floor;
+  for (const auto& log : oracle_training) law.training_s += static_cast<double>(log.first->rows()) / log.first->rate_hz;
 
   std::vector<TestLog> tests;
   tests.push_back(make_test("next cycle", slice(training_run, second_cycle, training_run.rows())));
@@ -476,7 +537,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   for (Method method : args.methods) {
     if (interrupted.load()) break;
     if (method == Method::oracle) {
-      law.methods.push_back(fit_oracle(oracle_training, training_floor, tests, args.oracle_without));
+      law.methods.push_back(fit_oracle(oracle_training, training_floor, tests, args.oracle_without, args.oracle_on_drift));
       continue;
     }
     MethodResult result;
@@ -512,8 +573,11 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
         if (chooses_features(options)) draw_options.selections = select_features_per_axis(resampled, options);
         bagged.push_back(calibrate(resampled, LogSpec{}, draw_options).model);
       }
+      const TestLog training_test = make_test("training", first);
       for (std::size_t a = 0; a < 3; ++a) {
         result.in_sample[a] = calibration.axes[a].in_sample.mse_after / training_floor[a];
+        result.training_distance[a] =
+            drift_mse(judge_axis(calibration.model, training_test, a, 0.0), first, a) / training_floor[a];
         result.terms[a] = calibration.model.axes[a].pipeline.term_names();
         const auto& channel = calibration.model.axes[a].pipeline.temperature_channel;
         result.temperature_channel[a] = channel ? *channel + 1 : 0;
@@ -549,6 +613,10 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
         }
         TestResult judged;
         for (std::size_t a = 0; a < 3; ++a) {
+          JudgedRows rows = judge_axis(calibration.model, test, a);
+          for (const auto& model : bagged) rows.predicted += judge_axis(model, test, a).predicted;
+          rows.predicted /= static_cast<double>(bagged.size() + 1);
+          judged.distance[a] = drift_mse(rows, test.run, a) / test.floor[a];
           judged.mse[a] = metrics[a].mse_after;
           judged.floor[a] = test.floor[a];
           judged.ratio[a] = metrics[a].mse_after / test.floor[a];

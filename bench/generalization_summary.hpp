@@ -76,6 +76,9 @@ struct TestResult {
   std::array<double, 3> mse{};    // held-out MSE after compensation, (°/h)²
   std::array<double, 3> floor{};  // the true noise floor of the same rows, (°/h)²
   std::array<double, 3> ratio{};  // mse / floor
+  // MSE of the prediction against the smoothed true drift (no noise) over the floor: how far
+  // the model is from the unit's drift there, the noise left out (simulated logs only).
+  std::array<double, 3> distance{};
 };
 
 struct MethodResult {
@@ -83,6 +86,7 @@ struct MethodResult {
   Cost fit;     // calibrate, for the auto methods given the shared search
   Cost search;  // the shared least-squares search (auto methods; zero for paper)
   std::array<double, 3> in_sample{};  // in-sample MSE / the training cycle's floor
+  std::array<double, 3> training_distance{};  // TestResult::distance on the training cycle's rows
   std::array<std::vector<std::string>, 3> terms;
   std::array<std::size_t, 3> temperature_channel{};  // 1-based channel of the axis' node; 0: its own
   // --node-channel any: per axis, each channel's node as the search scored it: {channel,
@@ -110,6 +114,8 @@ struct LawResult {
   std::vector<std::string> tests;  // "next cycle", the two other profiles' kinds, carried_test
   Cost search;
   Cost cost;  // the whole law: simulation, search, fits, evaluation
+  double training_s = 0;  // length of the training log(s)
+  std::array<double, 3> training_floor{};  // the true noise floor of the (first) training log
   std::vector<MethodResult> methods;
 };
 
@@ -316,9 +322,11 @@ inline nlohmann::json laws_json(const std::vector<LawResult>& laws) {
         nlohmann::json tests = nlohmann::json::array();
         for (std::size_t t = 0; t < result.tests.size(); ++t) {
           const auto& test = result.tests[t];
-          tests.push_back({{"test", law.tests[t]}, {"mse_after", test.mse}, {"floor", test.floor}, {"ratio", test.ratio}});
+          tests.push_back({{"test", law.tests[t]}, {"mse_after", test.mse}, {"floor", test.floor}, {"ratio", test.ratio},
+                          {"distance", test.distance}});
         }
         entry["in_sample_ratio"] = result.in_sample;
+        entry["training_distance"] = result.training_distance;
         entry["terms"] = result.terms;
         entry["temperature_channel"] = result.temperature_channel;
         if (!result.channel_scores[0].empty()) entry["channel_scores"] = result.channel_scores;
@@ -327,6 +335,7 @@ inline nlohmann::json laws_json(const std::vector<LawResult>& laws) {
       methods.push_back(entry);
     }
     out.push_back({{"seed", law.seed}, {"tests", law.tests}, {"cpu_s", law.cost.cpu_s}, {"wall_s", law.cost.wall_s},
+                   {"training_s", law.training_s}, {"training_floor", law.training_floor},
                    {"methods", methods}});
   }
   return out;
