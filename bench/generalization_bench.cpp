@@ -11,7 +11,7 @@
 //                                  [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
 //                                  [--cv-score geometric|pooled] [--min-gain X] [--training-noise K]
-//                                  [--bag B] [--training-quiet bias|all]
+//                                  [--bag B] [--training-quiet bias|gyro|all]
 //                                  [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
@@ -33,7 +33,7 @@
 // (K, K+1, ...) and judges the average of their predictions: what the training noise costs,
 // as if the user had B recordings of the same programme (fit times are the first model's).
 // --oracle-target drift fits and judges the oracle on the noise-free drift (with
-// --oracle-without: how far one law's aliases are from it); --training-quiet bias|all
+// --oracle-without: how far one law's aliases are from it); --training-quiet bias|gyro|all
 // trains on the cycle simulated again without the bias instability or any noise. The JSON
 // gives every test's `distance`, the MSE against the smoothed true drift over the floor,
 // and every axis' `training_distance`, the same on the training rows.
@@ -124,8 +124,9 @@ struct Arguments {
   double min_gain = FeatureSelectionOptions{}.min_gain;  // --min-gain: the searches' penalty per term (the kernel check takes it too)
   std::uint64_t training_noise = 0;  // --training-noise K: 0 the training run's own noise, K > 0 another draw
   std::size_t bag = 1;  // --bag B: B models on B noise draws of the training cycle, their predictions averaged
-  // --training-quiet bias|all (a diagnostic): the training cycle simulated again without the
-  // bias instability, or without any noise (the tests keep theirs): what the noise costs.
+  // --training-quiet bias|gyro|all (a diagnostic): the training cycle simulated again without
+  // the bias instability, without the gyro's noise, or without any noise (the thermometers'
+  // too); the tests keep theirs: what the noise costs.
   std::string training_quiet;
 };
 
@@ -151,7 +152,7 @@ Arguments parse(int argc, char** argv) {
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
                  "[--oracle-target gyro|drift] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
-                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--training-quiet bias|all] [--json FILE]\n",
+                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
     }
@@ -165,7 +166,9 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
     else if (flag == "--min-gain") args.min_gain = std::stod(value);
     else if (flag == "--training-noise") args.training_noise = std::stoull(value);
-    else if (flag == "--training-quiet" && (value == "bias" || value == "all")) args.training_quiet = value;
+    else if (flag == "--training-quiet" && (value == "bias" || value == "gyro" || value == "all")) {
+      args.training_quiet = value;
+    }
     else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
     else if (flag == "--cv-score" && (value == "geometric" || value == "pooled")) {
@@ -483,9 +486,11 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     if (!args.training_quiet.empty()) {
       sim::UnitLaw quiet = unit;
       quiet.noise.bias_instability = 0;
-      if (args.training_quiet == "all") {
+      if (args.training_quiet != "bias") {
         quiet.noise.angle_random_walk = 1e-9;  // a floor above zero for the in-sample ratio
         quiet.noise.quantization_arcsec = 0;
+      }
+      if (args.training_quiet == "all") {
         quiet.noise.temperature_noise_c = 0;
         quiet.noise.temperature_resolution_c = 0;
       }
