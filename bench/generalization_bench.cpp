@@ -333,16 +333,14 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
     qr.setThreshold(1e-12);
     const Eigen::VectorXd beta = scale.cwiseInverse().asDiagonal() * Eigen::VectorXd(qr.solve(y));
     result.in_sample[a] = (y - x * beta).squaredNorm() / static_cast<double>(n) / training_floor[a];
-    {
-      double sum = 0;
-      Eigen::Index rows = 0;
-      for (const auto& [run, regressors] : training) {
-        const OracleRows truth = oracle_rows(*run, *regressors, a, true);
-        sum += (truth.y - truth.x * beta).squaredNorm();
-        rows += truth.y.size();
-      }
-      result.training_distance[a] = sum / static_cast<double>(rows) / training_floor[a];
+    // The same fit against the noise-free drift of the training rows (the same rows as y
+    // when on_drift).
+    double distance_sum = 0;
+    for (std::size_t k = 0; k < training.size(); ++k) {
+      const OracleRows truth = on_drift ? parts[k] : oracle_rows(*training[k].first, *training[k].second, a, true);
+      distance_sum += (truth.y - truth.x * beta).squaredNorm();
     }
+    result.training_distance[a] = distance_sum / static_cast<double>(n) / training_floor[a];
     for (std::size_t j = 0; j < sim::kLawRegressors; ++j) {
       if (beta[static_cast<Eigen::Index>(j)] != 0) result.terms[a].emplace_back(sim::law_regressor_names()[j]);
     }
@@ -355,7 +353,7 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
                                     : static_cast<std::size_t>(std::llround(settle_s * tests[t].run.rate_hz));
       const auto first = static_cast<Eigen::Index>(first_input_row - (window - 1));
       const Eigen::VectorXd residual = (judged.y - judged.x * beta).tail(judged.y.size() - first);
-      const OracleRows truth = oracle_rows(tests[t].run, tests[t].regressors, a, true);
+      const OracleRows truth = on_drift ? judged : oracle_rows(tests[t].run, tests[t].regressors, a, true);
       result.tests[t].distance[a] =
           (truth.y - truth.x * beta).tail(truth.y.size() - first).squaredNorm() /
           static_cast<double>(truth.y.size() - first) / tests[t].floor[a];
@@ -429,6 +427,21 @@ double drift_mse(const JudgedRows& judged, const sim::ChamberRun& run, std::size
   return sum / static_cast<double>(judged.row.size());
 }
 
+// --training-quiet: the unit without the bias instability ("bias"), without any of the
+// gyro's noise ("gyro"), or without the thermometers' noise too ("all").
+sim::UnitLaw quiet_unit(sim::UnitLaw unit, const std::string& quiet) {
+  unit.noise.bias_instability = 0;
+  if (quiet != "bias") {
+    unit.noise.angle_random_walk = 1e-9;  // a floor above zero for the in-sample ratio
+    unit.noise.quantization_arcsec = 0;
+  }
+  if (quiet == "all") {
+    unit.noise.temperature_noise_c = 0;
+    unit.noise.temperature_resolution_c = 0;
+  }
+  return unit;
+}
+
 // What `thermodrift fit --model M [--features auto]` asks of calibrate (apps/thermodrift/fit.cpp
 // with its defaults: C 100, σ 1, ε 0.01, tolerance 1e-3; AFSA, blocked 5-fold CV, seed 1),
 // with one tuning thread so that a law's cost is one thread's.
@@ -483,23 +496,10 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   // --training-noise K: cycle 1 of the same programme with another noise draw (ARW, bias
   // instability, thermometer noise); the next cycle is still judged on the run above.
   const auto training_draw = [&](std::uint64_t draw) {
-    if (!args.training_quiet.empty()) {
-      sim::UnitLaw quiet = unit;
-      quiet.noise.bias_instability = 0;
-      if (args.training_quiet != "bias") {
-        quiet.noise.angle_random_walk = 1e-9;  // a floor above zero for the in-sample ratio
-        quiet.noise.quantization_arcsec = 0;
-      }
-      if (args.training_quiet == "all") {
-        quiet.noise.temperature_noise_c = 0;
-        quiet.noise.temperature_resolution_c = 0;
-      }
-      return slice(sim::simulate_unit(quiet, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw)), 0,
-                   second_cycle);
-    }
-    return draw == 0 ? slice(training_run, 0, second_cycle)
-                     : slice(sim::simulate_unit(unit, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw)),
-                             0, second_cycle);
+    if (draw == 0 && args.training_quiet.empty()) return slice(training_run, 0, second_cycle);
+    const sim::UnitLaw& drawn = args.training_quiet.empty() ? unit : quiet_unit(unit, args.training_quiet);
+    return slice(sim::simulate_unit(drawn, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw)), 0,
+                 second_cycle);
   };
   const sim::ChamberRun first = training_draw(args.training_noise);
   const sim::LawRegressors first_regressors = oracle ? slice(training_regressors, 0, second_cycle) : sim::LawRegressors{};
@@ -604,24 +604,21 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       for (const auto& test : tests) {
         auto metrics = test.carried_from_row ? evaluate_from(calibration.model, test.log, *test.carried_from_row)
                                              : evaluate(calibration.model, {test.log}, settle_s);
-        if (!bagged.empty()) {
-          for (std::size_t a = 0; a < 3; ++a) {
-            JudgedRows mean = judge_axis(calibration.model, test, a);
-            for (const auto& model : bagged) {
-              const JudgedRows other = judge_axis(model, test, a);
-              if (other.row != mean.row) throw std::runtime_error("bagged models judge different rows");
-              mean.predicted += other.predicted;
-            }
-            mean.predicted /= static_cast<double>(bagged.size() + 1);
-            metrics[a].mse_after = (mean.target - mean.predicted).squaredNorm() / static_cast<double>(mean.row.size());
-          }
-        }
         TestResult judged;
         for (std::size_t a = 0; a < 3; ++a) {
-          JudgedRows rows = judge_axis(calibration.model, test, a);
-          for (const auto& model : bagged) rows.predicted += judge_axis(model, test, a).predicted;
-          rows.predicted /= static_cast<double>(bagged.size() + 1);
-          judged.distance[a] = drift_mse(rows, test.run, a) / test.floor[a];
+          // The judged rows' prediction, averaged over the bagged models (--bag): its MSE
+          // against the gyro replaces evaluate's, its distance from the true drift is kept.
+          JudgedRows mean = judge_axis(calibration.model, test, a);
+          for (const auto& model : bagged) {
+            const JudgedRows other = judge_axis(model, test, a);
+            if (other.row != mean.row) throw std::runtime_error("bagged models judge different rows");
+            mean.predicted += other.predicted;
+          }
+          mean.predicted /= static_cast<double>(bagged.size() + 1);
+          if (!bagged.empty()) {
+            metrics[a].mse_after = (mean.target - mean.predicted).squaredNorm() / static_cast<double>(mean.row.size());
+          }
+          judged.distance[a] = drift_mse(mean, test.run, a) / test.floor[a];
           judged.mse[a] = metrics[a].mse_after;
           judged.floor[a] = test.floor[a];
           judged.ratio[a] = metrics[a].mse_after / test.floor[a];
