@@ -1,6 +1,7 @@
 // thermodrift simulate: a 3-axis FOG chamber test with known true drift (docs/simulator.md).
 #include <fmt/format.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -32,7 +33,20 @@ sim::ChamberRun simulate_law(const SimulateArguments& args, const StopToken& sto
   const sim::Setpoint setpoint = sim::draw_profile(sim::parse_profile_kind(args.profile), unit,
                                                    args.profile_seed.value_or(*args.law), args.options.cycles);
   if (args.describe) fmt::print(stderr, "{}", unit.describe());
-  return sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz, stop);
+  sim::ChamberRun run = sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz, stop);
+  if (args.options.record_internal_states) {
+    // The law's true regressors, the states its drift is linear in (coefficients: --describe).
+    static constexpr std::array<const char*, 3> axes = {"x", "y", "z"};
+    const auto names = sim::law_regressor_names();
+    sim::LawRegressors regressors = sim::law_regressors(unit, setpoint, args.options.rate_hz);
+    for (std::size_t a = 0; a < 3; ++a) {
+      for (std::size_t k = 1; k < sim::kLawRegressors; ++k) {  // not the constant
+        run.column_names.push_back(fmt::format("law_{}_{}", axes[a], names[k]));
+        run.columns.push_back(std::move(regressors[a][k]));
+      }
+    }
+  }
+  return run;
 }
 
 int run_simulate(const SimulateArguments& args) {
@@ -73,11 +87,11 @@ Command add_simulate(CLI::App& parent) {
       ->check(kSeed);
   app->add_flag("--describe", args->describe, "with --law: print the drawn unit's law on stderr");
   app->add_flag("--internal-states", args->options.record_internal_states,
-                "also write the coil temperature, gradient and hysteresis state of each axis");
+                "also write the coil temperature, gradient and hysteresis state of each axis (with --law: each "
+                "axis' true drift regressors, law_<axis>_<name>)");
   return {app, [args, app] {
             // The default unit's programme, or a drawn law's: the other's options would be ignored.
-            for (const char* option : args->law ? std::vector<const char*>{"--min-temp", "--max-temp", "--ramp", "--soak",
-                                                                           "--internal-states"}
+            for (const char* option : args->law ? std::vector<const char*>{"--min-temp", "--max-temp", "--ramp", "--soak"}
                                                 : std::vector<const char*>{"--profile", "--profile-seed", "--describe"}) {
               if (app->count(option) == 0) continue;
               throw UsageError(fmt::format(fmt::runtime(args->law ? "{} applies to the default unit, not --law" : "{} applies with --law"),

@@ -131,6 +131,21 @@ UnitLaw draw_unit(std::uint64_t law_seed) {
   return unit;
 }
 
+namespace {
+
+// The hysteresis' own constants: a memory's time constant and rate scale, a play's half-width.
+std::string hysteresis_detail(const AxisLaw& axis) {
+  switch (axis.hysteresis) {
+    case HysteresisKind::memory:
+      return fmt::format(" (τ {:.0f} s, R0 {:.2f} °C/min)", axis.hysteresis_time_constant_s, axis.hysteresis_rate_scale);
+    case HysteresisKind::play: return fmt::format(" (W {:.2f} °C)", axis.hysteresis_width_c);
+    case HysteresisKind::none: break;
+  }
+  return {};
+}
+
+}  // namespace
+
 std::string UnitLaw::describe() const {
   std::string text = fmt::format("law {}: range {:.0f}..{:.0f} °C, case τ {:.0f} s (+{:.1f} °C powered); noise ARW {:.4f} °/√h, "
                                  "BI {:.4f} °/h {}, temp noise {:.3f} °C res {:g} °C\n",
@@ -145,14 +160,14 @@ std::string UnitLaw::describe() const {
     for (double tau : axis.node_time_constants_s) chain += fmt::format("{}{:.0f}", chain.empty() ? "" : "→", tau);
     text += fmt::format("  {}: chain {} s (back {:.2f}, +{:.1f} °C), sensor on {}{} (τ {:.0f} s); {} a=({:.3g},{:.3g},{:.3g}) "
                         "step {:.2f}; rate {:.2f}; axial {:.3f}/{:.2f}; radial {:.2f} (G {:.0f} s, τ {:.0f} s); "
-                        "hysteresis {} {:.2f}; turn-on {:.2f} ({:.0f} s)\n",
+                        "hysteresis {} {:.2f}{}; turn-on {:.2f} ({:.0f} s)\n",
                         names[a], chain, axis.back_coupling, axis.self_heating_c,
                         axis.sensor_node < 0 ? "case" : fmt::format("{} node {}", names[static_cast<std::size_t>(axis.sensor_axis)], axis.sensor_node + 1),
                         "", axis.sensor_time_constant_s, axis.shape == StaticShape::polynomial ? "poly" : "tanh",
                         axis.polynomial[0], axis.polynomial[1], axis.polynomial[2], axis.step_dph, axis.rate_dph,
                         axis.axial_gradient_dph, axis.axial_gradient_rate_dph, axis.radial_gradient_rate_dph,
                         axis.radial_gain_s, axis.radial_time_constant_s,
-                        hysteresis_names[static_cast<std::size_t>(axis.hysteresis)], axis.hysteresis_dph,
+                        hysteresis_names[static_cast<std::size_t>(axis.hysteresis)], axis.hysteresis_dph, hysteresis_detail(axis),
                         axis.turn_on_dph, axis.turn_on_time_constant_s);
   }
   return text;

@@ -134,7 +134,6 @@ TEST(OptionChecks, OptionsThatWouldBeDroppedAreUsageErrors) {
            {"--profile slow", "--profile applies with --law"},
            {"--describe", "--describe applies with --law"},
            {"--law 3 --ramp 2", "--ramp applies to the default unit, not --law"},
-           {"--law 3 --internal-states", "--internal-states applies to the default unit, not --law"},
            {"--min-temp nan", "--min-temp: expected a temperature from -273.15 to 1000 °C, not 'nan'"}}) {
     SCOPED_TRACE(options);
     const auto result = run_thermodrift(dir, "simulate --out s.csv " + options);
