@@ -70,8 +70,9 @@ class Study:
     def distance(self, model, log, frame):
         predicted = np.asarray(model.drift(frame)).reshape(len(log), -1)[:, 0]
         axis = self.axis
-        true = log["drift_" + axis].rolling(SMOOTH_S, min_periods=1).mean().to_numpy()
-        noise = (log["gyro_" + axis] - log["drift_" + axis]).rolling(SMOOTH_S, min_periods=1).mean().to_numpy()
+        window = max(1, round(SMOOTH_S / float(np.median(np.diff(log["time_s"])))))  # rows in SMOOTH_S
+        true = log["drift_" + axis].rolling(window, min_periods=1).mean().to_numpy()
+        noise = (log["gyro_" + axis] - log["drift_" + axis]).rolling(window, min_periods=1).mean().to_numpy()
         judged = log["time_s"].to_numpy() >= SETTLE_S
         return float(np.mean((predicted - true)[judged] ** 2) / np.mean(noise[judged] ** 2))
 

@@ -1,7 +1,6 @@
 // thermodrift simulate: a 3-axis FOG chamber test with known true drift (docs/simulator.md).
 #include <fmt/format.h>
 
-#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -36,12 +35,11 @@ sim::ChamberRun simulate_law(const SimulateArguments& args, const StopToken& sto
   sim::ChamberRun run = sim::simulate_unit(unit, setpoint, args.options.seed, args.options.rate_hz, stop);
   if (args.options.record_internal_states) {
     // The law's true regressors, the states its drift is linear in (coefficients: --describe).
-    static constexpr std::array<const char*, 3> axes = {"x", "y", "z"};
     const auto names = sim::law_regressor_names();
     sim::LawRegressors regressors = sim::law_regressors(unit, setpoint, args.options.rate_hz);
     for (std::size_t a = 0; a < 3; ++a) {
       for (std::size_t k = 1; k < sim::kLawRegressors; ++k) {  // not the constant
-        run.column_names.push_back(fmt::format("law_{}_{}", axes[a], names[k]));
+        run.column_names.push_back(fmt::format("law_{}_{}", sim::kAxisNames[a], names[k]));
         run.columns.push_back(std::move(regressors[a][k]));
       }
     }

@@ -152,7 +152,6 @@ std::string UnitLaw::describe() const {
                                  seed, min_c, max_c, case_time_constant_s, case_self_heating_c, noise.angle_random_walk,
                                  noise.bias_instability, noise.flicker ? "flicker" : "Gauss-Markov",
                                  noise.temperature_noise_c, noise.temperature_resolution_c);
-  static constexpr std::array<const char*, 3> names = {"x", "y", "z"};
   static constexpr std::array<const char*, 3> hysteresis_names = {"none", "memory", "play"};
   for (std::size_t a = 0; a < 3; ++a) {
     const AxisLaw& axis = axes[a];
@@ -161,8 +160,8 @@ std::string UnitLaw::describe() const {
     text += fmt::format("  {}: chain {} s (back {:.2f}, +{:.1f} °C), sensor on {}{} (τ {:.0f} s); {} a=({:.3g},{:.3g},{:.3g}) "
                         "step {:.2f}; rate {:.2f}; axial {:.3f}/{:.2f}; radial {:.2f} (G {:.0f} s, τ {:.0f} s); "
                         "hysteresis {} {:.2f}{}; turn-on {:.2f} ({:.0f} s)\n",
-                        names[a], chain, axis.back_coupling, axis.self_heating_c,
-                        axis.sensor_node < 0 ? "case" : fmt::format("{} node {}", names[static_cast<std::size_t>(axis.sensor_axis)], axis.sensor_node + 1),
+                        kAxisNames[a], chain, axis.back_coupling, axis.self_heating_c,
+                        axis.sensor_node < 0 ? "case" : fmt::format("{} node {}", kAxisNames[static_cast<std::size_t>(axis.sensor_axis)], axis.sensor_node + 1),
                         "", axis.sensor_time_constant_s, axis.shape == StaticShape::polynomial ? "poly" : "tanh",
                         axis.polynomial[0], axis.polynomial[1], axis.polynomial[2], axis.step_dph, axis.rate_dph,
                         axis.axial_gradient_dph, axis.axial_gradient_rate_dph, axis.radial_gradient_rate_dph,

@@ -127,6 +127,9 @@ ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uin
 // exactly. A least-squares fit of a log's gyro on them is what an identification could at
 // best reach: the right structure on the true states, only the coefficients left to the
 // data (bench/generalization_bench --methods oracle).
+// The three axes' names, as describe() and the columns of `simulate --internal-states` write them.
+inline constexpr std::array<const char*, 3> kAxisNames = {"x", "y", "z"};
+
 inline constexpr std::size_t kLawRegressors = 12;
 std::array<std::string_view, kLawRegressors> law_regressor_names();
 std::array<double, kLawRegressors> law_coefficients(const AxisLaw& law);
