@@ -211,6 +211,16 @@ def study_law(task):
     return out
 
 
+def map_laws(study, tasks, jobs):
+    """study(task) for every task, on `jobs` processes; the rows of all in order."""
+    if jobs > 1:
+        with multiprocessing.Pool(jobs) as pool:
+            results = pool.map(study, tasks, chunksize=1)
+    else:
+        results = [study(t) for t in tasks]
+    return [row for law_rows in results for row in law_rows]
+
+
 def parse_laws(text):
     laws = []
     for part in text.split(","):
@@ -245,12 +255,7 @@ def main():
     args = parser.parse_args()
     binary = os.path.abspath(args.thermodrift)
     tasks = [(law, args.study, binary) for law in parse_laws(args.laws)]
-    if args.jobs > 1:
-        with multiprocessing.Pool(args.jobs) as pool:
-            results = pool.map(study_law, tasks, chunksize=1)
-    else:
-        results = [study_law(t) for t in tasks]
-    rows = [row for law_rows in results for row in law_rows]
+    rows = map_laws(study_law, tasks, args.jobs)
     summary(rows)
     if args.json:
         with open(args.json, "w") as f:

@@ -5,7 +5,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <memory>
+#include <random>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -178,6 +180,48 @@ TEST_F(Envelope, CompensateIsQuietInsideTheEnvelopeAndSaysWhenNeverReady) {
   const auto short_log = run_thermodrift(*dir_, "compensate --model full.json --data short.csv --out short_out.csv");
   ASSERT_EQ(short_log.status, 0) << short_log.err;
   EXPECT_TRUE(contains(short_log.err, "gyro_x: never ready: all 50 rows")) << short_log.err;
+}
+
+// The paper's pair on the default unit leaves hundreds of times the floor: fit says so, with
+// the figure it prints (in-sample without CV, the expected held-out MSE with it).
+TEST_F(Envelope, FitWarnsWhenTheModelIsFarFromTheFloor) {
+  const auto json = parse(full_fit_);
+  for (const auto& axis : json["axes"]) {
+    const auto name = axis.at("name").get<std::string>();
+    ASSERT_FALSE(axis.contains("expected_held_out")) << axis.dump();  // fixed C and σ: no CV
+    ASSERT_GT(axis.at("mse_after_x_floor").get<double>(), 2.0);
+    const std::regex line(name + R"(: on its training data it leaves ([0-9.e+]+) × the noise floor estimate: the model )"
+                                 R"(does not describe this unit's drift down to the noise)");
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(full_fit_.err, match, line)) << full_fit_.err;
+    EXPECT_NEAR(std::stod(match[1].str()), axis["mse_after_x_floor"].get<double>(),
+                1e-2 * axis["mse_after_x_floor"].get<double>());
+  }
+  const auto tuned = run_thermodrift(*dir_, "fit --data cycle.csv --gyro gyro_x --temp temp_x --model svr "
+                                            "--evaluations 9 --out tuned.json --json");
+  ASSERT_EQ(tuned.status, 0) << tuned.err;
+  const double held_out = parse(tuned)["axes"][0]["expected_held_out"]["x_floor_estimate"].get<double>();
+  ASSERT_GT(held_out, 2.0);
+  EXPECT_TRUE(contains(tuned.err, "gyro_x: its expected held-out MSE is ")) << tuned.err;
+}
+
+// A drift the model holds exactly (linear in the temperature, white noise): no warning.
+TEST(FarFromTheFloor, FitIsQuietWhenTheModelReachesTheFloor) {
+  TempDir dir;
+  std::mt19937_64 generator(7);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  std::string csv = "time_s,temp,gyro\n";
+  for (int t = 0; t < 6 * 3600; ++t) {
+    const double temp = 20.0 + 20.0 * std::sin(2 * M_PI * t / 10800.0);
+    csv += std::to_string(t) + "," + std::to_string(temp) + "," + std::to_string(0.05 * temp + noise(generator)) + "\n";
+  }
+  dir.write("line.csv", csv);
+  const auto fit = run_thermodrift(dir, "fit --data line.csv --gyro gyro --temp temp --model linear --features dT "
+                                        "--out line.json --json");
+  ASSERT_EQ(fit.status, 0) << fit.err;
+  const double ratio = parse(fit)["axes"][0].at("mse_after_x_floor").get<double>();
+  EXPECT_LT(ratio, 1.5);
+  EXPECT_FALSE(contains(fit.err, "noise floor estimate")) << fit.err;
 }
 
 }  // namespace
