@@ -194,6 +194,7 @@ TEST_F(Envelope, FitWarnsWhenTheModelIsFarFromTheFloor) {
                                  R"(does not describe this unit's drift down to the noise)");
     std::smatch match;
     ASSERT_TRUE(std::regex_search(full_fit_.err, match, line)) << full_fit_.err;
+    EXPECT_TRUE(contains(full_fit_.err, "; --features auto, or another chamber programme")) << full_fit_.err;
     EXPECT_NEAR(std::stod(match[1].str()), axis["mse_after_x_floor"].get<double>(),
                 1e-2 * axis["mse_after_x_floor"].get<double>());
   }
