@@ -28,7 +28,7 @@ over the noise floor from 1800 s on, as bench/missing_physics.py judges):
 
     PYTHONPATH=build/python /usr/bin/python3 bench/impulse_response.py --study search --laws 1-20 --jobs 2
 
-About 40 s per law for the search study, 10 s for the oracle's (one core each).
+About 40 s per law for the search study, 15 s for the oracle's (one core each).
 """
 
 import argparse
