@@ -177,9 +177,16 @@ def search_study(logs, axis):
     # with an intercept.
     single = {t: fit(node_first, [t]) for t in kept + dynamic}
 
+    evaluated = {}  # (log, term) -> the term's column: the union and the FIR fit share the kept terms'
+
+    def column(log, term):
+        key = (id(log), term)
+        if key not in evaluated:
+            evaluated[key] = np.asarray(single[term].drift(frame(log, node_first))).reshape(len(log), -1)[:, 0]
+        return evaluated[key]
+
     def columns(log, names, rows):
-        f = frame(log, node_first)
-        return [np.ones(len(rows))] + [np.asarray(single[t].drift(f)).reshape(len(log), -1)[rows, 0] for t in names]
+        return [np.ones(len(rows))] + [column(log, t)[rows] for t in names]
 
     training = logs["cycle"]
     rows = np.arange(0, len(training), STEP_S)

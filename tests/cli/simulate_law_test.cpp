@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -57,10 +56,9 @@ TEST(SimulateLaw, DescribePrintsTheDrawnLawOnStderr) {
   EXPECT_NE(result.err.find(" °C/min); turn-on"), std::string::npos) << result.err;
 }
 
-std::vector<double> cells(const std::string& line) {
+std::vector<double> numbers(const std::string& line) {
   std::vector<double> out;
-  std::stringstream in(line);
-  for (std::string cell; std::getline(in, cell, ',');) out.push_back(std::stod(cell));
+  for (const std::string& cell : testing::cells_of(line)) out.push_back(std::stod(cell));
   return out;
 }
 
@@ -72,7 +70,7 @@ TEST(SimulateLaw, InternalStatesAreTheRegressorsOfTheTrueDrift) {
   ASSERT_GT(lines.size(), 3600u);
   const auto names = sim::law_regressor_names();
   std::string header = chamber_run_header();
-  for (const char* axis : {"x", "y", "z"}) {
+  for (const char* axis : sim::kAxisNames) {
     for (std::size_t k = 1; k < sim::kLawRegressors; ++k) header += fmt::format(",law_{}_{}", axis, names[k]);
   }
   EXPECT_EQ(lines.front(), header);
@@ -80,7 +78,7 @@ TEST(SimulateLaw, InternalStatesAreTheRegressorsOfTheTrueDrift) {
   const std::size_t first = sim::chamber_run_columns.size();
   double largest = 0, worst = 0;
   for (std::size_t i = 1; i < lines.size(); i += 97) {
-    const std::vector<double> row = cells(lines[i]);
+    const std::vector<double> row = numbers(lines[i]);
     ASSERT_EQ(row.size(), first + 3 * (sim::kLawRegressors - 1)) << lines[i];
     for (std::size_t a = 0; a < 3; ++a) {
       const auto coefficients = sim::law_coefficients(unit.axes[a]);

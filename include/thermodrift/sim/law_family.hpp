@@ -120,6 +120,9 @@ Setpoint draw_profile(ProfileKind kind, const UnitLaw& unit, std::uint64_t seed,
 ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uint64_t noise_seed,
                          double rate_hz = 1.0, const StopToken& stop = {});
 
+// The three axes' names, as describe() and the columns of `simulate --internal-states` write them.
+inline constexpr std::array<const char*, 3> kAxisNames = {"x", "y", "z"};
+
 // The law's own regressors: the true internal states each term of an axis' drift multiplies
 // (1, ΔTc, ΔTc², ΔTc³, the tanh step, dTc/dt, the axial gradient and its rate, the radial
 // gradient's rate, the memory, the play, the turn-on transient), noise-free, row by row
@@ -127,9 +130,6 @@ ChamberRun simulate_unit(const UnitLaw& unit, const Setpoint& setpoint, std::uin
 // exactly. A least-squares fit of a log's gyro on them is what an identification could at
 // best reach: the right structure on the true states, only the coefficients left to the
 // data (bench/generalization_bench --methods oracle).
-// The three axes' names, as describe() and the columns of `simulate --internal-states` write them.
-inline constexpr std::array<const char*, 3> kAxisNames = {"x", "y", "z"};
-
 inline constexpr std::size_t kLawRegressors = 12;
 std::array<std::string_view, kLawRegressors> law_regressor_names();
 std::array<double, kLawRegressors> law_coefficients(const AxisLaw& law);
