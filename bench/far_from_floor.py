@@ -40,10 +40,11 @@ def study_law(task):
                              capture_output=True, text=True, check=True)
         model = td.load_model(model_file)
     result = json.loads(run.stdout)
+    predicted = {id(logs[p]): np.asarray(model.drift(logs[p])).reshape(len(logs[p]), -1) for p in PROGRAMMES}  # all axes
     out = []
     for i, axis in enumerate(result["axes"]):
         a = "xyz"[i]
-        ratios = judge(lambda log, rows: np.asarray(model.drift(log)).reshape(len(log), -1)[rows, i], logs, a)
+        ratios = judge(lambda log, rows: predicted[id(log)][rows, i], logs, a)
         row = {"law": law, "axis": a, "expected_x_floor": axis["expected_held_out"]["x_floor_estimate"],
                "in_sample_x_floor": axis["mse_after_x_floor"], "ratios": ratios}
         print(f"law {law} {a}: expected held-out {row['expected_x_floor']:.2f} x the floor estimate; "
