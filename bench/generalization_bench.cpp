@@ -10,7 +10,7 @@
 //                                  [--oracle-without NAME,...] [--oracle-target gyro|drift]
 //                                  [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
-//                                  [--cv-score geometric|pooled] [--min-gain X] [--richer-above X] [--training-noise K]
+//                                  [--cv-score geometric|pooled] [--min-gain X] [--training-noise K]
 //                                  [--bag B] [--training-quiet bias|gyro|all]
 //                                  [--json FILE]
 //
@@ -121,7 +121,6 @@ struct Arguments {
   double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
   bool node_under_dynamics = FeatureSelectionOptions{}.node_under_dynamics;  // --node-under-dynamics on|off
   FeatureSelectionOptions::CvScore cv_score = FeatureSelectionOptions{}.cv_score;  // --cv-score geometric|pooled
-  double richer_above = FeatureSelectionOptions{}.richer_search_above;  // --richer-above (thermal node; 0: never)
   double min_gain = FeatureSelectionOptions{}.min_gain;  // --min-gain: the searches' penalty per term (the kernel check takes it too)
   std::uint64_t training_noise = 0;  // --training-noise K: 0 the training run's own noise, K > 0 another draw
   std::size_t bag = 1;  // --bag B: B models on B noise draws of the training cycle, their predictions averaged
@@ -153,7 +152,7 @@ Arguments parse(int argc, char** argv) {
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
                  "[--oracle-target gyro|drift] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
-                 "[--cv-score geometric|pooled] [--min-gain X] [--richer-above X] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--json FILE]\n",
+                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
     }
@@ -166,7 +165,6 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--rate-span") args.rate_span = std::stod(value);
     else if (flag == "--max-cancellation") args.max_cancellation = std::stod(value);
     else if (flag == "--min-gain") args.min_gain = std::stod(value);
-    else if (flag == "--richer-above") args.richer_above = std::stod(value);
     else if (flag == "--training-noise") args.training_noise = std::stoull(value);
     else if (flag == "--training-quiet" && (value == "bias" || value == "gyro" || value == "all")) {
       args.training_quiet = value;
@@ -557,7 +555,6 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       options.selection.node_under_dynamics = args.node_under_dynamics;
       options.selection.cv_score = args.cv_score;
       options.selection.min_gain = args.min_gain;
-      options.selection.richer_search_above = args.richer_above;
       options.folds_by = args.folds_by;
       if (args.rate_span && method != Method::paper) options.rate_span_seconds = args.rate_span;
       if (chooses_features(options)) {

@@ -3,12 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <span>
 #include <string>
 #include <unordered_map>
 
 #include "thermodrift/error.hpp"
-#include "thermodrift/features/noise_floor.hpp"
 #include "thermodrift/tune/feature_selection.hpp"
 #include "tune/term_columns.hpp"
 
@@ -16,23 +14,9 @@ namespace thermodrift {
 
 namespace {
 
-// What one of the searches whose fits are averaged may grow on its node: memories of one
-// rate scale (°C/min; 0: the default, kDirectionRateScale = 0.2), refined with the time
-// constants or not, and plays.
-struct SearchKind {
-  double memory_scale = 0;
-  bool refine_scale = false;
-  bool memories = true, plays = true;
-};
-// The searches: memories of three rate scales about a factor 3 either side of the default,
-// each beside plays.
-constexpr SearchKind kSearches[] = {{0, false}, {0.07, false}, {0.5, false}};
-// The richer round (FeatureSelectionOptions::richer_search_above): the rate scale refined
-// from the default, from either side of it with memories only, and plays only.
-constexpr SearchKind kRicherSearches[] = {
-    {kDirectionRateScale, true}, {0.07, true, true, false}, {0.5, true, true, false}, {0, false, false, true}};
-// A refined rate scale stays within what the law family's memories span and a little more.
-constexpr double kLowestRateScale = 0.03, kHighestRateScale = 1.0;
+// The memory rate scales of the searches whose fits are averaged (°C/min; 0: the default,
+// kDirectionRateScale = 0.2): about a factor 3 either side of it.
+constexpr double kMemoryRateScales[] = {0, 0.07, 0.5};
 
 // The node's level and rate as terms: what the dynamic terms that read them are built on.
 struct NodeNames {
@@ -51,9 +35,8 @@ struct DynamicTerm {
     self_heating      // exp(-t/τ), τ the node's lag: heat switched on upstream of the node settling through it
   } kind;
   double tau = 0;  // TG of gradrate:τ:TG, TD of dir:TD:τ, the second lag's own τ; W (°C) of play:τ:W; τ of on:τ
-  double rate_scale = 0;  // R0 of a memory, °C/min (0: the default, kDirectionRateScale)
+  double rate_scale = 0;  // R0 of a memory, °C/min (0: the default, kDirectionRateScale); not refined
   std::string channel_term{};  // grad:A-B or gradrate:A-B: a measured gradient, no constant of its own
-  bool rate_refined = false;   // a memory's R0 refined with the time constants
 
   bool measured() const { return kind == Kind::channel_gradient || kind == Kind::channel_gradient_rate; }
   // Terms without a constant of their own to refine.
@@ -167,7 +150,6 @@ struct NodeModel {
       if (term.fixed()) continue;
       out.push_back({&term.tau, term.resolution(), term.shortest(2 * shortest),
                      term.kind == DynamicTerm::Kind::play ? term.longest() : std::min(term.longest(), longest)});
-      if (term.rate_refined) out.push_back({&term.rate_scale, 0.01, kLowestRateScale, kHighestRateScale});
     }
     return out;
   }
@@ -346,7 +328,6 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     double best_cv = kInfinity, runner_up_cv = kInfinity;
     double lag_cv = kInfinity;  // the single lag's
     std::vector<SelectionStep> path;
-    bool refined = false;  // best and runner_up refined (once, by the first search grown on them)
   };
   auto find_node = [&]() {
     NodeModel base;
@@ -496,10 +477,8 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     if (!moves.empty()) result.path.push_back({"tune", moves, model_cv, model.terms()});
   };
   // Dynamic terms, forward from a node: each must cut the CV MSE by more than min_gain.
-  // Memories and plays are offered as `search` allows.
-  auto grow = [&](NodeModel best, double best_cv, const SearchKind& search) -> std::pair<NodeModel, double> {
-    const DynamicTerm::Kind memory = DynamicTerm::Kind::memory;
-    const auto memory_of = [&](double tau) { return DynamicTerm{memory, tau, search.memory_scale, {}, search.refine_scale}; };
+  // Memories are offered with the rate scale `memory_scale` (0: the default).
+  auto grow = [&](NodeModel best, double best_cv, double memory_scale) -> std::pair<NodeModel, double> {
     std::vector<DynamicTerm> candidates;
     for (const double tau : grid) {
       for (const auto kind : {DynamicTerm::Kind::gradient_rate, DynamicTerm::Kind::second_lag}) {
@@ -507,12 +486,10 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
         if (tau <= candidate.longest()) candidates.push_back(candidate);
       }
     }
-    if (search.memories) {
-      for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) candidates.push_back(memory_of(tau));
+    for (const double tau : {150.0, 300.0, 600.0, 1200.0, 2400.0}) {
+      candidates.push_back({DynamicTerm::Kind::memory, tau, memory_scale});
     }
-    if (search.plays) {
-      for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
-    }
+    for (const double width : {0.5, 1.0, 2.0, 4.0}) candidates.push_back({DynamicTerm::Kind::play, width});
     candidates.push_back({DynamicTerm::Kind::asymmetric_rate});
     candidates.push_back({DynamicTerm::Kind::rate_tempco});
     if (options.power_on_start) {
@@ -541,10 +518,10 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       // then blocks the pair (the greedy search's lesson, docs/features.md).
       for (const double tg : {60.0, 120.0, 240.0, 480.0}) {
         for (const double td : {300.0, 600.0, 1200.0}) {
-          if (search.memories) offer({{DynamicTerm::Kind::gradient_rate, tg}, memory_of(td)});
+          offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::memory, td, memory_scale}});
         }
         for (const double width : {0.5, 1.0, 2.0, 4.0}) {
-          if (search.plays) offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::play, width}});
+          offer({{DynamicTerm::Kind::gradient_rate, tg}, {DynamicTerm::Kind::play, width}});
         }
       }
       if (ranked.empty()) break;
@@ -581,7 +558,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   // it stayed at 8x the floor in its own CV. So every node on the grid is scored again with
   // the grown terms in the model; the best is refined and grown from, and the result kept
   // when it beats the model by min_gain. At most twice.
-  auto renode = [&](NodeModel model, double model_cv, const SearchKind& search) -> std::pair<NodeModel, double> {
+  auto renode = [&](NodeModel model, double model_cv, double memory_scale) -> std::pair<NodeModel, double> {
     for (int round = 0; round < 2 && options.node_under_dynamics; ++round) {
       GridNodes found = search_grid(model);
       const bool structured = found.structured_cv < found.lag_cv;
@@ -590,7 +567,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
       if (!(node_cv < model_cv)) break;
       const std::size_t silent = result.path.size();
       refine(node, node_cv);
-      auto [grown, grown_cv] = grow(std::move(node), node_cv, search);
+      auto [grown, grown_cv] = grow(std::move(node), node_cv, memory_scale);
       result.path.resize(silent);
       if (!(grown_cv < keep * model_cv)) break;
       model = std::move(grown), model_cv = grown_cv;
@@ -619,40 +596,31 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     for (const auto& member : members) lowest = std::min(lowest, member.cv);
     return lowest;
   };
-  // The search on channel k from its node: the node and the structure not chosen refined
-  // (the first time), then a member grown on each of them by each of `searches` (each node
-  // searched again under its terms).
-  const auto described = [](const SearchKind& search) {
-    if (!search.memories) return std::string("plays only");
-    return fmt::format("memories{} with a rate scale of {} °C/min{}", search.plays ? "" : " only",
-                       search.memory_scale > 0 ? search.memory_scale : kDirectionRateScale,
-                       search.refine_scale ? ", refined" : "");
-  };
-  auto search_channel = [&](std::size_t k, std::span<const SearchKind> searches) {
+  // The search on channel k from its node: the node and the structure not chosen refined,
+  // then the six members grown on them (each node searched again under its terms).
+  auto search_channel = [&](std::size_t k) {
     cache = &caches[k];
-    Node& node = nodes[k];
-    if (!node.refined) {
-      for (SelectionStep step : node.path) {
-        if (k != 0) step.term += fmt::format(", on temperature channel {}", channels[k] + 1);
-        result.path.push_back(std::move(step));
-      }
-      refine(node.best, node.best_cv);
-      if (std::isfinite(node.runner_up_cv)) {
-        result.path.push_back({"node", "the structure not chosen, for the average below", node.runner_up_cv,
-                               node.runner_up.terms()});
-        refine(node.runner_up, node.runner_up_cv);
-      }
-      node.refined = true;
+    for (SelectionStep step : nodes[k].path) {
+      if (k != 0) step.term += fmt::format(", on temperature channel {}", channels[k] + 1);
+      result.path.push_back(std::move(step));
+    }
+    NodeModel best = nodes[k].best, runner_up = nodes[k].runner_up;
+    double best_cv = nodes[k].best_cv, runner_up_cv = nodes[k].runner_up_cv;
+    refine(best, best_cv);
+    if (std::isfinite(runner_up_cv)) {
+      result.path.push_back({"node", "the structure not chosen, for the average below", runner_up_cv, runner_up.terms()});
+      refine(runner_up, runner_up_cv);
     }
     std::vector<Member> members;
     for (const bool runner : {false, true}) {
-      if (runner && !std::isfinite(node.runner_up_cv)) break;
-      for (const SearchKind& search : searches) {
-        auto [grown, grown_cv] = grow(runner ? node.runner_up : node.best, runner ? node.runner_up_cv : node.best_cv, search);
-        auto [model, cv] = renode(std::move(grown), grown_cv, search);
+      if (runner && !std::isfinite(runner_up_cv)) break;
+      for (const double scale : kMemoryRateScales) {
+        auto [grown, grown_cv] = grow(runner ? runner_up : best, runner ? runner_up_cv : best_cv, scale);
+        auto [model, cv] = renode(std::move(grown), grown_cv, scale);
         std::vector<std::string> terms = model.terms();
-        result.path.push_back({"member", fmt::format("{}: {}, {}", members.size() + 1,
-                                                     runner ? "the node structure not chosen" : "the node", described(search)),
+        result.path.push_back({"member", fmt::format("{}: {}, memories with a rate scale of {} °C/min", members.size() + 1,
+                                                     runner ? "the node structure not chosen" : "the node",
+                                                     scale > 0 ? scale : kDirectionRateScale),
                                cv, terms});
         members.push_back({std::move(model), cv, std::move(terms)});
       }
@@ -660,7 +628,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
     return members;
   };
   const std::size_t first_step = result.path.size();
-  std::vector<Member> members = search_channel(best_channel, kSearches);
+  std::vector<Member> members = search_channel(best_channel);
   // The channel again, under the dynamic terms. The rule above compares bare nodes; a node
   // on another thermometer can win there and lose once each channel's terms are grown
   // (development law 9, y: another channel's 1,032 s lag beat the own channel's node, and
@@ -670,7 +638,7 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   // kept are dropped from the path.
   if (best_channel != 0 && options.node_under_dynamics) {
     const std::size_t own_first_step = result.path.size();
-    std::vector<Member> own = search_channel(0, kSearches);
+    std::vector<Member> own = search_channel(0);
     const double other_cv = lowest_cv(members), own_cv = lowest_cv(own);
     const bool other = other_cv < keep * own_cv;
     const auto steps = [&](std::size_t k) { return result.path.begin() + static_cast<std::ptrdiff_t>(k); };
@@ -691,75 +659,48 @@ FeatureSelection identify_thermal_node(const std::vector<ChamberLog>& logs, std:
   }
   cache = &caches[best_channel];
   if (best_channel != 0) result.temperature_channel = channels[best_channel];
-  // Only the members the CV cannot tell from the best (within min_gain of its CV MSE), their
-  // fits averaged into `out` (its terms, CV MSE, averaged sets and linear fit).
-  const auto settle = [&](std::vector<Member> members, FeatureSelection& out) {
-    const double lowest = lowest_cv(members);
-    std::vector<Member> kept;
-    std::string kept_numbers;
-    for (std::size_t m = 0; m < members.size(); ++m) {
-      if (members[m].cv * (1.0 - options.min_gain) > lowest) continue;
-      kept_numbers += fmt::format("{}{}", kept_numbers.empty() ? "" : ", ", m + 1);
-      kept.push_back(std::move(members[m]));
+  // Only the members the CV cannot tell from the best (within min_gain of its CV MSE).
+  const double lowest = lowest_cv(members);
+  std::vector<Member> kept;
+  std::string kept_numbers;
+  for (std::size_t m = 0; m < members.size(); ++m) {
+    if (members[m].cv * (1.0 - options.min_gain) > lowest) continue;
+    kept_numbers += fmt::format("{}{}", kept_numbers.empty() ? "" : ", ", m + 1);
+    kept.push_back(std::move(members[m]));
+  }
+  std::vector<std::string> names;
+  std::size_t distinct_members = 0;
+  for (std::size_t m = 0; m < kept.size(); ++m) {
+    const auto repeats = [&](const Member& earlier) { return earlier.terms == kept[m].terms; };
+    if (std::none_of(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(m), repeats)) ++distinct_members;
+    for (const auto& name : kept[m].terms) {
+      if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
     }
-    std::vector<std::string> names;
-    std::size_t distinct_members = 0;
-    for (std::size_t m = 0; m < kept.size(); ++m) {
-      const auto repeats = [&](const Member& earlier) { return earlier.terms == kept[m].terms; };
-      if (std::none_of(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(m), repeats)) ++distinct_members;
-      for (const auto& name : kept[m].terms) {
-        if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
-      }
-    }
-    out.terms = names;
-    out.averaged_sets.clear();
-    out.linear_fit.reset();
-    // ... and what it found is judged and fitted on the model's own columns.
-    if (distinct_members == 1) {
-      const LeastSquaresScore scored =
-          least_squares_cv_score(cache->exact_matrix(names), y, out.held_out.blocks, grouped(kept.front().model));
-      out.cv_mse = penalized(scored, false);  // pooled, as averages are
-      return;
-    }
-    Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());
-    const double weight = 1.0 / static_cast<double>(kept.size());
-    const Eigen::MatrixXd columns = cache->exact_matrix(names);
-    const auto of = [&](const std::vector<std::string>& set) {
-      std::vector<Eigen::Index> at;
-      for (const auto& name : set) at.push_back(std::find(names.begin(), names.end(), name) - names.begin());
-      return Eigen::MatrixXd(columns(Eigen::all, at));
-    };
-    for (const auto& member : kept) {
-      out.averaged_sets.push_back(member.terms);
-      held_out += weight * least_squares_cv_predictions(of(member.terms), y, out.held_out.blocks);
-    }
-    out.cv_mse = held_out_mse(held_out, y, out.held_out.blocks);
-    out.linear_fit = averaged_least_squares(columns, y, names, out.averaged_sets);
-    out.path.push_back({"average",
-                        fmt::format("members {} ({} distinct sets), their fits averaged", kept_numbers, distinct_members),
-                        out.cv_mse, names});
+  }
+  result.terms = names;
+  // ... and what it found is judged and fitted on the model's own columns.
+  if (distinct_members == 1) {
+    const LeastSquaresScore scored =
+        least_squares_cv_score(cache->exact_matrix(names), y, result.held_out.blocks, grouped(kept.front().model));
+    result.cv_mse = penalized(scored, false);  // pooled, as averages are
+    return result;
+  }
+  Eigen::VectorXd held_out = Eigen::VectorXd::Zero(y.size());
+  const double weight = 1.0 / static_cast<double>(kept.size());
+  const Eigen::MatrixXd columns = cache->exact_matrix(names);
+  const auto of = [&](const std::vector<std::string>& set) {
+    std::vector<Eigen::Index> at;
+    for (const auto& name : set) at.push_back(std::find(names.begin(), names.end(), name) - names.begin());
+    return Eigen::MatrixXd(columns(Eigen::all, at));
   };
-  settle(std::move(members), result);
-
-  // Far from the noise floor, the richer round on the channel kept; its average replaces the
-  // first when it beats it by min_gain.
-  if (options.richer_search_above <= 0 || pipeline.smooth_seconds <= 0) return result;
-  const NoiseFloorEstimate floor = estimate_noise_floor(logs, axis, pipeline.smooth_seconds);
-  if (!floor.usable() || !(result.cv_mse > options.richer_search_above * floor.variance)) return result;
-  const std::size_t richer_first_step = result.path.size();
-  FeatureSelection richer = result;
-  richer.path.push_back({"richer", fmt::format("a CV MSE of {:.3g} times the noise floor estimate: richer searches",
-                                               result.cv_mse / floor.variance),
-                         result.cv_mse, result.terms});
-  std::vector<Member> richer_members = search_channel(best_channel, kRicherSearches);
-  richer.path.insert(richer.path.end(), result.path.begin() + static_cast<std::ptrdiff_t>(richer_first_step),
-                     result.path.end());
-  result.path.resize(richer_first_step);
-  settle(std::move(richer_members), richer);
-  richer.candidates_scored = result.candidates_scored;
-  if (richer.cv_mse < keep * result.cv_mse) return richer;
-  result.path.push_back({"richer", fmt::format("richer searches reached a CV MSE of {:.6g}: not kept", richer.cv_mse),
-                         result.cv_mse, result.terms});
+  for (const auto& member : kept) {
+    result.averaged_sets.push_back(member.terms);
+    held_out += weight * least_squares_cv_predictions(of(member.terms), y, result.held_out.blocks);
+  }
+  result.cv_mse = held_out_mse(held_out, y, result.held_out.blocks);
+  result.linear_fit = averaged_least_squares(columns, y, names, result.averaged_sets);
+  result.path.push_back({"average", fmt::format("members {} ({} distinct sets), their fits averaged", kept_numbers, distinct_members),
+                         result.cv_mse, names});
   return result;
 }
 

@@ -71,12 +71,6 @@ struct FeatureSelectionOptions {
   // only to measure what the change brings.
   enum class CvScore { pooled, geometric };
   CvScore cv_score = CvScore::geometric;
-  // thermal_node: when the averaged searches leave a pooled CV MSE above this many times the
-  // noise floor estimate (the model does not reach the noise), a second round of searches
-  // with richer hysteresis runs (each memory's rate scale refined with its time constants;
-  // searches restricted to memories or to plays), and its average replaces the first when
-  // its CV MSE is lower by min_gain. 0: never.
-  double richer_search_above = 0;
   // Asked before each set is scored (both methods): a stop request throws Interrupted.
   StopToken stop;
   // Axes searched at once by select_features_per_axis, and searched and fitted at once by
@@ -113,8 +107,7 @@ struct SvrJudgeOptions {
 
 struct SelectionStep {
   // "add", "drop", "tune" (time constants moved), "svr" (a set judged by the SVR); thermal_node
-  // also "node", "member" (one search's final set), "average" (the members averaged) and
-  // "richer" (the richer round begun, or not kept)
+  // also "node", "member" (one search's final set) and "average" (the members averaged)
   std::string action;
   std::string term;    // the term(s) added or dropped, "TAU -> TAU'" moves, or the set judged
   double cv_mse = 0;   // (°/h)², the score after the step (least squares, by options.cv_score for
