@@ -14,7 +14,6 @@ programme by more than 10 and 30 times the floor.
 About 15 s per law on one core.
 """
 
-import argparse
 import json
 import os
 import subprocess
@@ -25,7 +24,7 @@ import warnings
 import numpy as np
 
 import thermodrift as td
-from impulse_response import judge, map_laws, parse_laws
+from impulse_response import judge, law_parser, map_laws, parse_laws
 from missing_physics import PROGRAMMES, simulate
 
 
@@ -54,12 +53,8 @@ def study_law(task):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--laws", default="1-40")
-    parser.add_argument("--jobs", type=int, default=1)
+    parser = law_parser(__doc__)
     parser.add_argument("--fit", default="--model linear --features auto", help="fit's options (one string)")
-    parser.add_argument("--json", help="write every axis' figures here")
-    parser.add_argument("--thermodrift", default="build/bin/thermodrift")
     args = parser.parse_args()
     tasks = [(law, os.path.abspath(args.thermodrift), args.fit.split()) for law in parse_laws(args.laws)]
     rows = map_laws(study_law, tasks, args.jobs)

@@ -228,6 +228,16 @@ def map_laws(study, tasks, jobs):
     return [row for law_rows in results for row in law_rows]
 
 
+def law_parser(doc, laws="1-40"):
+    """The options every study over development laws takes: --laws, --jobs, --json, --thermodrift."""
+    parser = argparse.ArgumentParser(description=doc.split("\n")[0])
+    parser.add_argument("--laws", default=laws, help="development laws, e.g. 1-20 or 3,7,13")
+    parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument("--json", help="write every axis' figures here")
+    parser.add_argument("--thermodrift", default="build/bin/thermodrift")
+    return parser
+
+
 def parse_laws(text):
     laws = []
     for part in text.split(","):
@@ -253,12 +263,8 @@ def summary(rows):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = law_parser(__doc__, laws="1-20")
     parser.add_argument("--study", choices=["oracle", "search"], required=True)
-    parser.add_argument("--laws", default="1-20", help="development laws, e.g. 1-20 or 3,7,13")
-    parser.add_argument("--jobs", type=int, default=1)
-    parser.add_argument("--json", help="write every axis' ratios here")
-    parser.add_argument("--thermodrift", default="build/bin/thermodrift")
     args = parser.parse_args()
     binary = os.path.abspath(args.thermodrift)
     tasks = [(law, args.study, binary) for law in parse_laws(args.laws)]

@@ -474,10 +474,11 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("time_column",
                              [](const Model& self) { return self.model.time_column.value_or(std::string()); })
       .def("compensate", &compensate)
-      .def("evaluate", [](const Model& self, const py::list& frames, double settle) {
+      .def("evaluate", [](const Model& self, const py::list& frames, double settle, bool running) {
         std::vector<ChamberLog> logs = to_logs(frames);
         const nlohmann::json result = run_interruptible([&](const StopToken& stop) {
-          return cli::evaluation_result(self.model, self.path, logs, settle, stop);
+          return cli::evaluation_result(self.model, self.path, logs, settle, stop,
+                                        running ? LogStart::running : LogStart::power_on);
         });
         return json_to_python(result);
       });

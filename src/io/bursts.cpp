@@ -75,11 +75,7 @@ namespace {
 // The log with each group of rows [begin, end) replaced by one row: the mean time, gyro
 // and temperature of its rows, the file line of its first row.
 ChamberLog means_of_groups(const ChamberLog& log, const std::vector<std::pair<std::size_t, std::size_t>>& groups) {
-  ChamberLog out;
-  out.source = log.source;
-  out.time_origin = log.time_origin;
-  out.gyro_names = log.gyro_names;
-  out.temperature_names = log.temperature_names;
+  ChamberLog out = without_rows(log);
   out.warnings = log.warnings;
   out.despiked_gyro = log.despiked_gyro;
   out.despiked_temperature = log.despiked_temperature;

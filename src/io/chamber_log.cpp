@@ -208,6 +208,15 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
   return columns;
 }
 
+ChamberLog without_rows(const ChamberLog& log) {
+  ChamberLog out;
+  out.source = log.source;
+  out.time_origin = log.time_origin;
+  out.gyro_names = log.gyro_names;
+  out.temperature_names = log.temperature_names;
+  return out;
+}
+
 ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end) {
   end = std::min(end, log.rows());
   begin = std::min(begin, end);
@@ -215,18 +224,62 @@ ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end)
     return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(begin),
                                v.begin() + static_cast<std::ptrdiff_t>(end));
   };
-  ChamberLog part;
-  part.source = log.source;
+  ChamberLog part = without_rows(log);
   part.time = cut(log.time);
-  part.time_origin = log.time_origin;
   part.bursts = log.bursts;  // its rows are still burst means
-  part.gyro_names = log.gyro_names;
-  part.temperature_names = log.temperature_names;
   for (const auto& g : log.gyro) part.gyro.push_back(cut(g));
   for (const auto& t : log.temperature) part.temperature.push_back(cut(t));
   part.line.assign(log.line.begin() + static_cast<std::ptrdiff_t>(begin),
                    log.line.begin() + static_cast<std::ptrdiff_t>(end));
   return part;
+}
+
+ChamberLog with_ramp_history(const ChamberLog& log, double span_seconds, double fit_seconds) {
+  if (log.rows() < 2 || !(span_seconds > 0)) return log;
+  std::vector<double> steps(log.rows() - 1);
+  for (std::size_t i = 1; i < log.rows(); ++i) steps[i - 1] = log.time[i] - log.time[i - 1];
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  const double step = std::max(steps[steps.size() / 2], 1.0);
+  const auto count = static_cast<std::size_t>(span_seconds / step);
+  const double start = log.time.front();
+  // The rows the line is fitted to: the first fit_seconds, two at least.
+  std::size_t fitted = 2;
+  while (fitted < log.rows() && log.time[fitted] - start <= fit_seconds) ++fitted;
+
+  ChamberLog out = without_rows(log);
+  out.bursts = log.bursts;
+  out.warnings = log.warnings;
+  for (std::size_t k = count; k > 0; --k) out.time.push_back(start - step * static_cast<double>(k));
+  out.time.insert(out.time.end(), log.time.begin(), log.time.end());
+  out.line.assign(count, 0);
+  out.line.insert(out.line.end(), log.line.begin(), log.line.end());
+  for (const auto& gyro : log.gyro) {
+    std::vector<double> column(count, gyro.front());
+    column.insert(column.end(), gyro.begin(), gyro.end());
+    out.gyro.push_back(std::move(column));
+  }
+  for (const auto& temperature : log.temperature) {
+    // Least squares on t - start: the slope and the line's value at the start.
+    double mean_t = 0, mean_v = 0;
+    for (std::size_t i = 0; i < fitted; ++i) mean_t += log.time[i] - start, mean_v += temperature[i];
+    mean_t /= static_cast<double>(fitted), mean_v /= static_cast<double>(fitted);
+    double covariance = 0, variance = 0;
+    for (std::size_t i = 0; i < fitted; ++i) {
+      const double dt = log.time[i] - start - mean_t;
+      covariance += dt * (temperature[i] - mean_v), variance += dt * dt;
+    }
+    const double slope = variance > 0 ? covariance / variance : 0;
+    const double at_start = mean_v - slope * mean_t;
+    const auto [low, high] = std::minmax_element(temperature.begin(), temperature.end());
+    std::vector<double> column;
+    column.reserve(count + log.rows());
+    for (std::size_t k = 0; k < count; ++k) {
+      column.push_back(std::clamp(at_start + slope * (out.time[k] - start), *low, *high));
+    }
+    column.insert(column.end(), temperature.begin(), temperature.end());
+    out.temperature.push_back(std::move(column));
+  }
+  return out;
 }
 
 LogSampleReader::LogSampleReader(CsvReader& reader, const LogSpec& spec)

@@ -169,6 +169,29 @@ FeatureTable settled_rows(const FeatureTable& table, double settle_seconds) {
   return out;
 }
 
+// The rows of a table streamed over a log with `prepended` rows of history before it
+// (with_ramp_history), numbered as the log's own; until the pipeline's first restart (a
+// gap), their time since the start counts from the log's first row, `history_seconds` later.
+FeatureTable own_rows(const FeatureTable& table, std::size_t prepended, double history_seconds) {
+  std::vector<Eigen::Index> kept;
+  FeatureTable out;
+  out.run_start = {0};
+  bool restarted = false;
+  for (std::size_t i = 0; i < table.rows(); ++i) {
+    restarted = restarted || (i > 0 && table.since_start[i] < table.since_start[i - 1]);
+    if (table.row[i] < prepended) continue;
+    kept.push_back(static_cast<Eigen::Index>(i));
+    out.time.push_back(table.time[i]);
+    out.since_start.push_back(restarted ? table.since_start[i] : table.since_start[i] - history_seconds);
+    out.temperature.push_back(table.temperature[i]);
+    out.rate.push_back(table.rate[i]);
+    out.row.push_back(table.row[i] - prepended);
+  }
+  out.features = table.features(kept, Eigen::all);
+  out.target = table.target(kept);
+  return out;
+}
+
 // The logs the feature search reads: each sampled faster than every (smoothing window or
 // rate span, the shorter) / 100 seconds averaged in bins of that width (io/bursts.hpp's
 // binned), the others as they are. The search's candidate columns are filters run over
@@ -748,12 +771,17 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
 }
 
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
-                                          double settle_seconds, const StopToken& stop) {
+                                          double settle_seconds, const StopToken& stop, LogStart start) {
+  std::vector<ChamberLog> histories;  // LogStart::running: each log after its ramp history
+  if (start == LogStart::running) {
+    for (const auto& log : logs) histories.push_back(with_ramp_history(log));
+  }
   std::vector<AxisEvaluation> evaluations;
   for (std::size_t axis = 0; axis < model.axes.size(); ++axis) {
     const auto& axis_model = model.axes[axis];
     FeatureTable table;
-    for (const auto& log : logs) {
+    for (std::size_t l = 0; l < logs.size(); ++l) {
+      const ChamberLog& log = logs[l];
       stop.throw_if_requested("evaluation");
       if (log.axes() != model.axes.size()) {
         throw DataError(log.source, 0, 0,
@@ -761,7 +789,10 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
                                     model.axes.size(), log.axes()));
       }
       const auto channel = temperature_channel_per_axis(log).at(axis);
-      FeatureTable part = build_feature_table(axis_model.pipeline, log, axis, channel, false);
+      FeatureTable part = histories.empty()
+                              ? build_feature_table(axis_model.pipeline, log, axis, channel, false)
+                              : own_rows(build_feature_table(axis_model.pipeline, histories[l], axis, channel, false),
+                                         histories[l].rows() - log.rows(), log.time.front() - histories[l].time.front());
       if (settle_seconds > 0) part = settled_rows(part, settle_seconds);
       append_rows(table, part);
     }

@@ -127,8 +127,24 @@ ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec, const 
 // The same from an open reader (a stream, say).
 ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec, const StopToken& stop = {});
 
+// A log with no rows and `log`'s source, time origin and column names: what a log made
+// from it (a slice, burst means, a history before it) starts from.
+ChamberLog without_rows(const ChamberLog& log);
+
 // Rows [begin, end) of a log, as a log of their own (a held-out cycle, say).
 ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end);
+
+// A log cut from a running recording, with a history before it in which each temperature
+// channel followed the straight line fitted (least squares) to its first `fit_seconds`,
+// held within that channel's range over the log: `span_seconds` of rows every max(the
+// log's median step, 1 s), the gyro columns holding their first value, line 0. A model
+// streamed over it starts the log's own rows with its lags where a unit that had been
+// following its initial rate leaves them, not in equilibrium at the first row
+// (`evaluate --log-start running`). The log's rows follow unchanged.
+inline constexpr double kRampHistorySeconds = 21600;  // four times the longest lag a search chooses
+inline constexpr double kRampFitSeconds = 300;
+ChamberLog with_ramp_history(const ChamberLog& log, double span_seconds = kRampHistorySeconds,
+                             double fit_seconds = kRampFitSeconds);
 
 struct LogSample {
   double time = 0;                  // s since the first kept row's time (or row / rate)

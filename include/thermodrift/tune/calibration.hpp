@@ -197,9 +197,15 @@ struct AxisEvaluation {
   ResidualMetrics metrics;
   std::optional<EnvelopeTally> outside_envelope;  // when the model file has an envelope
 };
+// Where a log starts (evaluate --log-start). `power_on`: the lags start in equilibrium at its
+// first row, as a unit switched on there is. `running`: the log is cut from a longer
+// recording, so each log is streamed after the history with_ramp_history gives it, and its
+// settling counts from its own first row.
+enum class LogStart { power_on, running };
 // `stop` is asked per axis and log and every 4096 predicted samples (Interrupted).
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
-                                          double settle_seconds = 0, const StopToken& stop = {});
+                                          double settle_seconds = 0, const StopToken& stop = {},
+                                          LogStart start = LogStart::power_on);
 // Metrics on the rows of `log` from `first_row` on, the features streamed from its first
 // row: the held-out part of one continuous log, with filters and lags carried into it
 // as a running compensator carries them (they see temperatures only, never the gyro).

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -449,6 +450,46 @@ TEST(SliceRows, KeepsTheRowsAsked) {
   EXPECT_EQ(part.gyro[0], (std::vector<double>{2, 3}));
   EXPECT_EQ(part.temperature[0], (std::vector<double>{21, 22}));
   EXPECT_EQ(part.line, (std::vector<std::size_t>{3, 4}));
+}
+
+// A log cut mid-ramp: the history before it continues each thermometer's initial line
+// (exactly, for a line), held within the thermometer's range over the log, at the log's
+// step; the gyro columns hold their first value, and the log's rows follow unchanged.
+TEST(ChamberLog, RampHistoryContinuesEachThermometersInitialLineWithinItsRange) {
+  ChamberLog log;
+  log.source = "cut.csv";
+  log.gyro_names = {"gyro_x"};
+  log.temperature_names = {"temp_a", "temp_b"};
+  log.gyro.resize(1), log.temperature.resize(2);
+  for (int i = 0; i < 1000; ++i) {
+    const double t = 100.0 + 2.0 * i;
+    log.time.push_back(t);
+    log.line.push_back(static_cast<std::size_t>(i) + 2);
+    log.gyro[0].push_back(0.5 + 0.001 * i);
+    const double u = t - 100.0;
+    log.temperature[0].push_back(u <= 1000 ? 20.0 + 0.01 * u : 30.0 - 0.02 * (u - 1000));  // up 0.6 °C/min, then down to 10.04 °C
+    log.temperature[1].push_back(5.0 - 0.005 * std::min(u, 600.0));  // down, then flat at 2 °C
+  }
+  const ChamberLog history = with_ramp_history(log, 3600, 300);
+  const std::size_t count = 1800;  // 3600 s at the log's 2 s step
+  ASSERT_EQ(history.rows(), count + log.rows());
+  EXPECT_EQ(history.time[count - 1], 98.0);
+  EXPECT_EQ(history.time[0], 100.0 - 3600.0);
+  for (std::size_t k = 0; k < count; ++k) {
+    const double before = history.time[k] - 100.0;  // < 0
+    EXPECT_NEAR(history.temperature[0][k], std::max(20.0 + 0.01 * before, 10.04), 1e-9) << k;  // held at the log's lowest
+    EXPECT_NEAR(history.temperature[1][k], std::min(5.0 - 0.005 * before, 5.0), 1e-9) << k;   // and at its highest
+    EXPECT_EQ(history.gyro[0][k], 0.5);
+    EXPECT_EQ(history.line[k], 0u);
+  }
+  EXPECT_NEAR(history.temperature[0][count - 1], 19.98, 1e-9);
+  EXPECT_NEAR(history.temperature[0][0], 10.04, 1e-9);
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    EXPECT_EQ(history.time[count + i], log.time[i]);
+    EXPECT_EQ(history.gyro[0][count + i], log.gyro[0][i]);
+    EXPECT_EQ(history.temperature[1][count + i], log.temperature[1][i]);
+    EXPECT_EQ(history.line[count + i], log.line[i]);
+  }
 }
 
 }  // namespace
