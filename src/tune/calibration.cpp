@@ -793,7 +793,11 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
                               ? build_feature_table(axis_model.pipeline, log, axis, channel, false)
                               : own_rows(build_feature_table(axis_model.pipeline, histories[l], axis, channel, false),
                                          histories[l].rows() - log.rows(), log.time.front() - histories[l].time.front());
-      if (settle_seconds > 0) part = settled_rows(part, settle_seconds);
+      // After a history the first rows are ready, but their smoothed gyro still averages the
+      // history's made-up one: the log's own warm-up stays out, as without it.
+      const double settle = histories.empty() ? settle_seconds
+                                              : std::max(settle_seconds, axis_model.pipeline.warm_up_seconds());
+      if (settle > 0) part = settled_rows(part, settle);
       append_rows(table, part);
     }
     if (table.rows() == 0) {
