@@ -467,7 +467,8 @@ TEST(ChamberLog, RampHistoryContinuesEachThermometersInitialLineWithinItsRange) 
     log.line.push_back(static_cast<std::size_t>(i) + 2);
     log.gyro[0].push_back(0.5 + 0.001 * i);
     const double u = t - 100.0;
-    log.temperature[0].push_back(u <= 1000 ? 20.0 + 0.01 * u : 30.0 - 0.02 * (u - 1000));  // up 0.6 °C/min, then down to 10.04 °C
+    // up 0.6 °C/min, then down to 10.04 °C
+    log.temperature[0].push_back(u <= 1000 ? 20.0 + 0.01 * u : 30.0 - 0.02 * (u - 1000));
     log.temperature[1].push_back(5.0 - 0.005 * std::min(u, 600.0));  // down, then flat at 2 °C
   }
   const ChamberLog history = with_ramp_history(log, 3600, 300);
@@ -477,8 +478,9 @@ TEST(ChamberLog, RampHistoryContinuesEachThermometersInitialLineWithinItsRange) 
   EXPECT_EQ(history.time[0], 100.0 - 3600.0);
   for (std::size_t k = 0; k < count; ++k) {
     const double before = history.time[k] - 100.0;  // < 0
-    EXPECT_NEAR(history.temperature[0][k], std::max(20.0 + 0.01 * before, 10.04), 1e-9) << k;  // held at the log's lowest
-    EXPECT_NEAR(history.temperature[1][k], std::min(5.0 - 0.005 * before, 5.0), 1e-9) << k;   // and at its highest
+    // held at the log's lowest, and the other at its highest
+    EXPECT_NEAR(history.temperature[0][k], std::max(20.0 + 0.01 * before, 10.04), 1e-9) << k;
+    EXPECT_NEAR(history.temperature[1][k], std::min(5.0 - 0.005 * before, 5.0), 1e-9) << k;
     EXPECT_EQ(history.gyro[0][k], 0.5);
     EXPECT_EQ(history.line[k], 0u);
   }
