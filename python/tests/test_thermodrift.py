@@ -127,7 +127,7 @@ def test_evaluate_matches_evaluate_json(logs, tmp_path):
                     assert mine[key] == pytest.approx(value, rel=1e-12), key
                 else:
                     assert mine[key] == value, key
-    # the test log is the second cycle, begun mid-transient: its start weighs differently
+    # the history before the log moves its lags (the test log starts at power-on: `running` is the wrong start for it)
     assert results["running"]["axes"][0]["mse_after"] != results["power-on"]["axes"][0]["mse_after"]
 
 
