@@ -208,6 +208,14 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
   return columns;
 }
 
+double median_step(const ChamberLog& log) {
+  std::vector<double> steps;
+  for (std::size_t r = 1; r < log.rows(); ++r) steps.push_back(log.time[r] - log.time[r - 1]);
+  if (steps.empty()) return 1.0;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return steps[steps.size() / 2];
+}
+
 ChamberLog without_rows(const ChamberLog& log) {
   ChamberLog out;
   out.source = log.source;
@@ -236,10 +244,7 @@ ChamberLog slice_rows(const ChamberLog& log, std::size_t begin, std::size_t end)
 
 ChamberLog with_ramp_history(const ChamberLog& log, double span_seconds, double fit_seconds) {
   if (log.rows() < 2 || !(span_seconds > 0)) return log;
-  std::vector<double> steps(log.rows() - 1);
-  for (std::size_t i = 1; i < log.rows(); ++i) steps[i - 1] = log.time[i] - log.time[i - 1];
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-  const double step = std::max(steps[steps.size() / 2], 1.0);
+  const double step = std::max(median_step(log), 1.0);
   const auto count = static_cast<std::size_t>(span_seconds / step);
   const double start = log.time.front();
   // The rows the line is fitted to: the first fit_seconds, two at least.

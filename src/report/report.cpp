@@ -92,14 +92,6 @@ double noise_floor(const ChamberLog& log, std::size_t axis, const std::vector<do
   return variance / static_cast<double>(smoothed.size());
 }
 
-double median_interval(const ChamberLog& log) {
-  std::vector<double> steps;
-  for (std::size_t r = 1; r < log.rows(); ++r) steps.push_back(log.time[r] - log.time[r - 1]);
-  if (steps.empty()) return 1.0;
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-  return steps[steps.size() / 2];
-}
-
 nlohmann::json number_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
 
 nlohmann::json metrics_cell(const ResidualMetrics& metrics, double floor) {
@@ -182,7 +174,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   figures.log = &log;
   figures.split_time = study.split_time;
   figures.svr_index = svr_index < study.models.size() ? svr_index : 0;
-  const double sample_rate = 1.0 / median_interval(log);
+  const double sample_rate = 1.0 / median_step(log);
   for (const auto& m : study.models) figures.model_labels.push_back(model_label(m, 0));
   for (std::size_t a = 0; a < axes; ++a) {
     stop.throw_if_requested("compensation and Allan deviation");

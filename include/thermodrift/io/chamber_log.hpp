@@ -127,6 +127,9 @@ ChamberLog read_chamber_log(const std::string& path, const LogSpec& spec, const 
 // The same from an open reader (a stream, say).
 ChamberLog read_chamber_log(CsvReader& reader, const LogSpec& spec, const StopToken& stop = {});
 
+// The median step between a log's rows, s (1 for a log of fewer than two rows).
+double median_step(const ChamberLog& log);
+
 // A log with no rows and `log`'s source, time origin and column names: what a log made
 // from it (a slice, burst means, a history before it) starts from.
 ChamberLog without_rows(const ChamberLog& log);
