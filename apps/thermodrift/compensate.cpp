@@ -115,7 +115,14 @@ int run_compensate(const CompensateArguments& args) {
     if (!result.ready) ++not_ready_rows;
     line.assign(row->text);
     for (std::size_t a = 0; a < axes; ++a) {
-      fmt::format_to(std::back_inserter(line), "{}{:.9g}", delimiter, result.compensated[a]);
+      // A model overflowing on this row: the Compensator flags it not ready, and the column
+      // says NaN as the exported step does, never "inf", which reads as a number.
+      const double compensated = result.compensated[a];
+      if (std::isfinite(compensated)) {
+        fmt::format_to(std::back_inserter(line), "{}{:.9g}", delimiter, compensated);
+      } else {
+        fmt::format_to(std::back_inserter(line), "{}nan", delimiter);
+      }
     }
     for (std::size_t a = 0; a < axes; ++a) {
       const auto& status = result.axes[a];

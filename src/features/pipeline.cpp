@@ -8,6 +8,7 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/chamber_log.hpp"
 #include "thermodrift/io/json_integer.hpp"
+#include "thermodrift/io/libsvm_reader.hpp"
 
 namespace thermodrift {
 
@@ -56,6 +57,10 @@ void Pipeline::validate() const {
                                  kMinTemperatureC, kMaxTemperatureC));
   }
   if (terms.empty()) throw UsageError("a pipeline needs at least one feature term");
+  if (!libsvm && terms.size() > kMaxPipelineTerms) {
+    throw UsageError(fmt::format("{} feature terms for one axis; at most {} are allowed", terms.size(),
+                                 kMaxPipelineTerms));
+  }
   if (temperature_channel && *temperature_channel >= kMaxTemperatureChannels) {
     throw UsageError(fmt::format("temperature channel {} is beyond the {} a model can read",
                                  *temperature_channel + 1, kMaxTemperatureChannels));
@@ -94,7 +99,12 @@ Pipeline Pipeline::from_json(const nlohmann::json& json) {
                             json.at("version").dump(), kVersion));
   }
   if (json.value("input", "chamber_log") == "libsvm") {
-    Pipeline pipeline = libsvm_input(json.at("terms").size());
+    const auto& names = json.at("terms");
+    // As many as the libsvm reader gives a fit; checked before a term is made of each.
+    if (!names.is_array() || names.size() > static_cast<std::size_t>(kMaxLibsvmFeatureIndex)) {
+      throw Error(fmt::format("a libsvm pipeline's terms must be a list of at most {}", kMaxLibsvmFeatureIndex));
+    }
+    Pipeline pipeline = libsvm_input(names.size());
     if (pipeline.term_names() != json.at("terms").get<std::vector<std::string>>()) {
       throw Error("libsvm pipeline terms must be x1..xN");
     }

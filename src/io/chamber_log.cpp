@@ -91,9 +91,26 @@ std::string column_label(const CsvReader& reader, std::size_t index) {
   return reader.has_header() ? reader.header()[index] : fmt::format("column {}", index + 1);
 }
 
+// A column found by a name the header gives twice would be a guess between the two, and
+// two gyro axes found as gyro_x were fitted and written as one column read twice.
+void refuse_repeated_name(const CsvReader& reader, std::size_t index, const char* role) {
+  const auto& header = reader.header();
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (i == index || header[i] != header[index]) continue;
+    const auto [first, second] = std::minmax(i, index);
+    throw DataError(reader.path(), reader.header_line(), second + 1,
+                    fmt::format("the header names '{}' twice (columns {} and {}): the {} column of that name is "
+                                "ambiguous; rename one",
+                                excerpt(header[index]), first + 1, second + 1, role));
+  }
+}
+
 std::size_t find_column(const std::string& name, const CsvReader& reader, const char* role) {
   for (std::size_t i = 0; i < reader.header().size(); ++i) {
-    if (reader.header()[i] == name) return i;
+    if (reader.header()[i] == name) {
+      refuse_repeated_name(reader, i, role);
+      return i;
+    }
   }
   if (const auto index = as_index(name)) {
     if (*index >= 1 && *index <= reader.column_count()) return *index - 1;
@@ -156,6 +173,7 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
                                    "sampling rate with --rate",
                                    reader.path()));
     }
+    refuse_repeated_name(reader, *columns.time, "time");
   } else if (!(*spec.rate_hz > 0) || !std::isfinite(*spec.rate_hz)) {
     throw UsageError(fmt::format("--rate must be a positive number of hertz, not {}", *spec.rate_hz));
   }
@@ -166,6 +184,7 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
       throw UsageError(fmt::format("{}: no column named gyro*; name the gyro columns with --gyro",
                                    reader.path()));
     }
+    for (const std::size_t index : columns.gyro) refuse_repeated_name(reader, index, "gyro");
   } else {
     for (const auto& name : spec.gyro_columns) {
       const std::size_t index = find_column(name, reader, "gyro");
@@ -185,6 +204,7 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
       throw UsageError(fmt::format(
           "{}: no column named temp*; name the temperature columns with --temp", reader.path()));
     }
+    for (const std::size_t index : columns.temperature) refuse_repeated_name(reader, index, "temperature");
     // Found by name, channels beyond one per axis would be paired with the axes by their
     // order in the file (a chamber column first would feed the first axis): ask instead.
     if (columns.temperature.size() != 1 && columns.temperature.size() != columns.gyro.size()) {

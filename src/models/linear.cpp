@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/json_integer.hpp"
@@ -123,11 +124,26 @@ double LinearModel::predict(std::span<const double> features) const {
 }
 
 Eigen::VectorXd LinearModel::predict(const Eigen::MatrixXd& features) const {
+  // Each regressor's factors found once, not every term's power scanned on every row
+  // (terms × regressors per row); multiplied in the same order, so the same bits as above.
+  std::vector<std::vector<std::pair<Eigen::Index, int>>> factors(regressors.size());
+  for (std::size_t k = 0; k < regressors.size(); ++k) {
+    const auto& powers = regressors[k].powers;
+    for (std::size_t i = 0; i < powers.size(); ++i) {
+      if (powers[i] > 0) factors[k].emplace_back(static_cast<Eigen::Index>(i), powers[i]);
+    }
+  }
   Eigen::VectorXd out(features.rows());
-  std::vector<double> row(static_cast<std::size_t>(features.cols()));
   for (Eigen::Index i = 0; i < features.rows(); ++i) {
-    for (Eigen::Index j = 0; j < features.cols(); ++j) row[static_cast<std::size_t>(j)] = features(i, j);
-    out(i) = predict(row);
+    double value = intercept;
+    for (std::size_t k = 0; k < regressors.size(); ++k) {
+      double regressor = 1.0;
+      for (const auto& [term, power] : factors[k]) {
+        for (int p = 0; p < power; ++p) regressor *= features(i, term);
+      }
+      value += coefficients(static_cast<Eigen::Index>(k)) * regressor;
+    }
+    out(i) = value;
   }
   return out;
 }

@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 #include <string_view>
+#include <utility>
 
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
@@ -23,6 +24,49 @@ constexpr const char* kFormatName = "thermodrift-model";
 // °/h below 3.6e8 (kMaxRateDph). A number beyond it is a failed fit or an edited file,
 // and would give inf or garbage drift on every sample.
 constexpr double kModelNumberLimit = 1e12;
+
+// A model file nests about eight levels deep (axes, an axis, its fit record, ...). Far
+// deeper is no model, and the checks below recurse once per level: 30,000 levels of
+// arrays overflowed the stack.
+constexpr std::size_t kMaxNesting = 100;
+
+// Where `text` first opens an array or object deeper than kMaxNesting, as 1-based line and
+// column; nothing if it never does. Brackets inside strings do not count.
+std::optional<std::pair<std::size_t, std::size_t>> find_excess_nesting(std::string_view text) {
+  std::size_t depth = 0, line = 1, column = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : text) {
+    ++column;
+    if (c == '\n') {
+      ++line;
+      column = 0;
+    }
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxNesting) return std::pair{line, column};
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return std::nullopt;
+}
+
+// Whether `json` nests deeper than `levels` arrays or objects; recurses at most `levels` deep.
+bool nested_deeper_than(const nlohmann::json& json, std::size_t levels) {
+  if (!json.is_structured()) return false;
+  if (levels == 0) return true;
+  return std::any_of(json.begin(), json.end(),
+                     [&](const nlohmann::json& value) { return nested_deeper_than(value, levels - 1); });
+}
 
 // The first null (JSON's stand-in for NaN and inf) or number beyond the limit in `json`
 // but its member `skip`, named by its path ("model.coefficients[1]"); nothing if none.
@@ -157,6 +201,10 @@ nlohmann::json to_json(const DriftModel& model) {
 
 DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& source) {
   auto fail = [&](const std::string& what) { return DataError(source, 0, 0, what); };
+  // Before anything walks it: a JSON value handed in through the API was never scanned.
+  if (nested_deeper_than(json, kMaxNesting)) {
+    throw fail(fmt::format("arrays or objects nested more than {} deep: not a model file", kMaxNesting));
+  }
   try {
     if (!json.is_object() || json.value("format", "") != kFormatName) {
       throw fail("not a thermodrift model file (no \"format\": \"thermodrift-model\")");
@@ -170,7 +218,15 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
     model.gyro_unit = parse_gyro_unit(json.at("gyro_unit").get<std::string>());
     if (json.contains("time_column")) model.time_column = json.at("time_column").get<std::string>();
     if (json.contains("time_unit")) model.time_unit = parse_time_unit(json.at("time_unit").get<std::string>());
-    if (json.contains("rate_hz")) model.rate_hz = json.at("rate_hz").get<double>();
+    if (json.contains("rate_hz")) {
+      model.rate_hz = json.at("rate_hz").get<double>();
+      // A row's time is its number over the rate: a subnormal rate made it infinite. (A
+      // number beyond the limit, or not finite, is named as such below.)
+      if (std::abs(*model.rate_hz) <= kModelNumberLimit && !(*model.rate_hz >= 1 / kModelNumberLimit)) {
+        throw fail(fmt::format("rate_hz is {:.6g}: a sampling rate must be at least {:g} Hz", *model.rate_hz,
+                               1 / kModelNumberLimit));
+      }
+    }
     if (json.contains("despike")) {
       const auto& despike = json.at("despike");
       if (!despike.is_object() || !despike.contains("window") || !despike.contains("sigmas")) {
@@ -296,6 +352,10 @@ DriftModel load_drift_model(const std::string& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string text = buffer.str();
+  if (const auto at = find_excess_nesting(text)) {
+    throw DataError(path, at->first, at->second,
+                    fmt::format("arrays or objects nested more than {} deep: not a model file", kMaxNesting));
+  }
   nlohmann::json json;
   try {
     json = parse_without_duplicate_keys(text, path);

@@ -15,11 +15,11 @@ Standardization Standardization::of(const Eigen::MatrixXd& features, const Eigen
   s.feature_scale.resize(features.cols());
   for (Eigen::Index j = 0; j < features.cols(); ++j) {
     const double sd = std::sqrt((features.col(j).array() - s.feature_mean(j)).square().sum() / n);
-    s.feature_scale(j) = sd > 1e-12 ? sd : 1.0;
+    s.feature_scale(j) = sd > kMinStandardScale ? sd : 1.0;
   }
   s.target_mean = target.mean();
   const double sd = std::sqrt((target.array() - s.target_mean).square().sum() / n);
-  s.target_scale = sd > 1e-12 ? sd : 1.0;
+  s.target_scale = sd > kMinStandardScale ? sd : 1.0;
   return s;
 }
 
@@ -126,7 +126,12 @@ SvrModel SvrModel::from_json(const nlohmann::json& json, const std::vector<std::
   SvrModel model;
   model.scaling.feature_mean = as_eigen(json.at("feature_mean"), d, "feature_mean");
   model.scaling.feature_scale = as_eigen(json.at("feature_scale"), d, "feature_scale");
-  if ((model.scaling.feature_scale.array() <= 0).any()) throw Error("feature_scale must be positive");
+  for (Eigen::Index j = 0; j < model.scaling.feature_scale.size(); ++j) {
+    if (!(model.scaling.feature_scale(j) >= kMinStandardScale)) {
+      throw Error(fmt::format("model.feature_scale[{}] is {:.6g}: a scale must be at least {:g} (features are divided "
+                              "by it)", j, model.scaling.feature_scale(j), kMinStandardScale));
+    }
+  }
   model.scaling.target_mean = json.at("target_mean").get<double>();
   model.scaling.target_scale = json.at("target_scale").get<double>();
   model.function.gamma = json.at("gamma").get<double>();
@@ -139,8 +144,16 @@ SvrModel SvrModel::from_json(const nlohmann::json& json, const std::vector<std::
     if (!std::isfinite(v)) throw Error("non-finite number in the SVR model");
   }
   if (!(model.function.gamma > 0)) throw Error("gamma must be positive");
-  // Predictions are target_mean + target_scale·f(x): a scale of 0 makes every one the mean.
-  if (!(model.scaling.target_scale > 0)) throw Error(fmt::format("target_scale must be positive, not {}", model.scaling.target_scale));
+  // σ = √(1/(2γ)) divides by γ: a subnormal γ made σ infinite.
+  if (!std::isfinite(model.sigma())) {
+    throw Error(fmt::format("gamma {:.6g} is too small: sigma = sqrt(1/(2 gamma)) is not finite", model.function.gamma));
+  }
+  // Predictions are target_mean + target_scale·f(x): a scale of 0 makes every one the mean,
+  // and a standardized target is divided by it.
+  if (!(model.scaling.target_scale >= kMinStandardScale)) {
+    throw Error(fmt::format("target_scale must be positive, at least {:g}, not {:.6g}", kMinStandardScale,
+                            model.scaling.target_scale));
+  }
   // sigma is written for people beside gamma = 1/(2 sigma²); an edit of one alone leaves
   // a file whose reader cannot tell which was meant.
   if (json.contains("sigma")) {

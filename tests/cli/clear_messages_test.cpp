@@ -42,6 +42,21 @@ TEST_F(ClearMessages, EmptyListItemsAndAGyroColumnTwice) {
   EXPECT_EQ(run_thermodrift(dir_, fit + "--gyro gyro_x --gyro gyro_y").status, 0);  // one flag per column still works
 }
 
+// A header naming gyro_x twice: fit found both columns by their prefix and wrote two axes
+// reading column gyro_x, a model evaluate and compensate then refused as a usage error.
+// Every command reading the log refuses it as bad data, naming the header line.
+TEST_F(ClearMessages, AHeaderNamingAColumnTwice) {
+  ASSERT_EQ(run_thermodrift(dir_, "fit --data log.csv --temp temp_x,temp_y,temp_z --model linear --out good.json").status, 0);
+  std::string text = read_file(dir_.file("log.csv"));
+  text.replace(text.find("gyro_y"), 6, "gyro_x");
+  dir_.write("twice.csv", text);
+  const std::string said = "twice.csv:1:7: the header names 'gyro_x' twice (columns 6 and 7)";
+  expect_refused("fit --data twice.csv --temp temp_x,temp_y,temp_z --model linear --out m.json", 3, said);
+  expect_refused("evaluate --model good.json --data twice.csv", 3, said);
+  expect_refused("compensate --model good.json --data twice.csv --out c.csv", 3, said);
+  EXPECT_FALSE(std::filesystem::exists(dir_.file("c.csv")));
+}
+
 // Numbers in a list: an empty item was dropped (two scales for three columns), and a
 // word or NaN is named for what it is.
 TEST_F(ClearMessages, EmptyOrJunkItemsInNumberLists) {

@@ -19,6 +19,12 @@
 
 namespace thermodrift {
 
+// Feature terms a chamber-log pipeline may have. The identification's largest sets hold
+// about 60; a linear model's prediction costs terms × regressors per sample, so a file of
+// 5,000 terms took minutes to evaluate. libsvm-format models have one term per column,
+// up to kMaxLibsvmFeatureIndex.
+inline constexpr std::size_t kMaxPipelineTerms = 256;
+
 struct Pipeline {
   static constexpr int kVersion = 1;
   double smooth_seconds = 100;      // trailing moving-average window on gyro and temperature (the paper: 100 s)

@@ -19,8 +19,14 @@
 
 namespace thermodrift {
 
-// Affine map of each feature to zero mean and unit standard deviation (constant
-// features keep scale 1 rather than dividing by zero).
+// The smallest scale a standardization has: a spread below it counts as constant. A model
+// file's scales are refused below it, since features are divided by them (a subnormal
+// scale made every prediction NaN); the numbers divided stay within ±1e12, the quotients
+// within 1e24.
+inline constexpr double kMinStandardScale = 1e-12;
+
+// Affine map of each feature to zero mean and unit standard deviation (features whose
+// spread is at most kMinStandardScale keep scale 1 rather than dividing by almost zero).
 struct Standardization {
   Eigen::VectorXd feature_mean;
   Eigen::VectorXd feature_scale;

@@ -329,6 +329,34 @@ TEST(ChamberLogErrors, MissingColumnNameNamesTheHeaderLine) {
   EXPECT_TRUE(contains(log_error(path, spec).message(), "no time column named 'seconds'"));
 }
 
+// A header naming a column twice: found by that name (given, or by the gyro/temp/time
+// prefixes), either could be meant. Fuzzing found gyro_x twice fitted as two axes reading
+// one column, in a model evaluate then refused.
+TEST(ChamberLogErrors, AColumnNamedTwiceInTheHeader) {
+  TempDir dir;
+  const auto path = dir.write("log.csv", "# banner\ntime_s,temp,gyro_x,gyro_x,gyro_z\n0,20,1,2,3\n1,20,1,2,3\n");
+  LogSpec detected;  // columns found by their names' prefixes
+  auto error = log_error(path, detected);
+  EXPECT_EQ(error.line(), 2u);
+  EXPECT_EQ(error.column(), 4u);
+  EXPECT_EQ(error.message(), "the header names 'gyro_x' twice (columns 3 and 4): the gyro column of that name is "
+                             "ambiguous; rename one");
+  error = log_error(path, named_spec());
+  EXPECT_TRUE(contains(error.message(), "the header names 'gyro_x' twice (columns 3 and 4)")) << error.what();
+  for (const auto& [header, said] :
+       {std::pair{"time_s,temp,temp,gyro_x", "'temp' twice (columns 2 and 3): the temperature column"},
+        std::pair{"time_s,time_s,temp,gyro_x", "'time_s' twice (columns 1 and 2): the time column"}}) {
+    const auto twice = log_error(dir.write("twice.csv", std::string(header) + "\n0,0,20,1\n1,1,20,1\n"), detected);
+    EXPECT_TRUE(contains(twice.message(), said)) << twice.what();
+  }
+  // By index the column is not in doubt; a repeated name nothing reads is no concern.
+  LogSpec by_index = named_spec();
+  by_index.gyro_columns = {"4", "5"};
+  EXPECT_EQ(read_chamber_log(path, by_index).axes(), 2u);
+  const auto unused = dir.write("unused.csv", "time_s,temp,gyro_x,note,note\n0,20,1,5,6\n1,20,1,5,6\n");
+  EXPECT_EQ(read_chamber_log(unused, detected).axes(), 1u);
+}
+
 TEST(ChamberLogErrors, ColumnIndexOutOfRange) {
   TempDir dir;
   const auto with_header = dir.write("h.csv", kHeader + "0,20,1\n");

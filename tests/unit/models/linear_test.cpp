@@ -256,6 +256,20 @@ TEST(Regressor, ProductAndPowerTermsParseBack) {
   EXPECT_THROW(Regressor::parse("lag:600^3", names), UsageError);
 }
 
+// The batch prediction (evaluate, fit's figures) skips the zero powers the per-sample one
+// (the Compensator) multiplies through: the same bits, row by row.
+TEST(LinearModel, BatchPredictionIsThePerSampleOneBitForBit) {
+  const Problem problem = chamber_like(200, 3);
+  Eigen::MatrixXd features(problem.features.rows(), 3);
+  features << problem.features, problem.features.col(0).array().cube().matrix();
+  const LinearModel model = fit_least_squares(features, problem.target, quadratic_regressors(3));
+  const Eigen::VectorXd batch = model.predict(features);
+  for (Eigen::Index i = 0; i < features.rows(); ++i) {
+    const std::vector<double> row = {features(i, 0), features(i, 1), features(i, 2)};
+    ASSERT_EQ(batch(i), model.predict(row)) << "row " << i;
+  }
+}
+
 TEST(LinearModelJson, RoundTrips) {
   const Problem problem = chamber_like(200, 7);
   const std::vector<std::string> names = {"dT", "rate"};

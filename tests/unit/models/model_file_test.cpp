@@ -2,6 +2,7 @@
 // with a one-line DataError (truncation with the line and column where the text ends).
 #include "thermodrift/models/model_file.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -63,6 +64,29 @@ nlohmann::json saved_json(const TempDir& dir) {
   return nlohmann::json::parse(testing::read_file(path));
 }
 
+// A one-vector SVR on (dT, rate) whose file every check accepts, and what loading a
+// changed copy of it says ("accepted" when nothing).
+const std::vector<std::string> kSvrTerms = {"dT", "rate"};
+
+SvrModel small_svr() {
+  SvrModel svr;
+  svr.scaling = Standardization::identity(2);
+  svr.function.gamma = 0.5;
+  svr.function.coefficients = Eigen::VectorXd::Constant(1, 0.3);
+  svr.function.support_vectors = Eigen::MatrixXd::Constant(1, 2, 0.2);
+  svr.C = 10;
+  return svr;
+}
+
+std::string refusal(const nlohmann::json& body) {
+  try {
+    SvrModel::from_json(body, kSvrTerms);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
 TEST(ModelFile, SaveAndLoadGiveTheSameModel) {
   TempDir dir;
   const auto path = dir.file("model.json");
@@ -113,12 +137,8 @@ TrainingEnvelope heating_only_envelope() {
 // load; a file without one is a plain SVR.
 TEST(ModelFile, PartiallyLinearSvrRoundTrips) {
   const std::vector<std::string> terms = {"lag:300", "rate"};
-  SvrModel svr;
-  svr.scaling = Standardization::identity(2);
-  svr.function.gamma = 0.5;
+  SvrModel svr = small_svr();
   svr.function.bias = 0.1;
-  svr.function.coefficients = Eigen::VectorXd::Constant(1, 0.3);
-  svr.function.support_vectors = Eigen::MatrixXd::Constant(1, 2, 0.2);
   LinearModel linear;
   linear.intercept = 1.5;
   linear.regressors = linear_regressors(2);
@@ -341,6 +361,88 @@ TEST(ModelFileErrors, SyntaxErrorNamesItsLineAndColumn) {
   EXPECT_TRUE(contains(error.message(), "not valid JSON")) << error.what();
 }
 
+// Fuzzing found a valid model with an extra key holding arrays nested 30,000 deep: every
+// command that loaded it crashed with the stack overflowed.
+TEST(ModelFileErrors, DeepNestingIsRefusedWhereItPassesTheLimit) {
+  TempDir dir;
+  std::string text = saved_json(dir).dump(1);
+  const std::size_t depth = 30000;
+  const std::string nested = "\"x\": " + std::string(depth, '[') + std::string(depth, ']') + ", ";
+  const std::size_t at = text.find("\"gyro_unit\"");
+  text.insert(at, nested);
+  const auto error = load_error(dir.write("deep.json", text));
+  // The 100th '[': the file's own object is the first level.
+  const auto [line, column] = end_of(text.substr(0, at + 5 + 100));
+  EXPECT_EQ(error.line(), line) << error.what();
+  EXPECT_EQ(error.column(), column - 1) << error.what();
+  EXPECT_TRUE(contains(error.message(), "nested more than 100 deep")) << error.what();
+  // Brackets in strings are text, and the model's own nesting is far from the limit.
+  std::string quoted = saved_json(dir).dump(1);
+  quoted.insert(quoted.find("\"gyro_unit\""), "\"note\": \"" + std::string(500, '[') + "\", ");
+  EXPECT_NO_THROW(load_drift_model(dir.write("quoted.json", quoted)));
+
+  // Through the API, the JSON was never scanned as text.
+  const auto json = nlohmann::json::parse(text);
+  try {
+    drift_model_from_json(json, "api.json");
+    ADD_FAILURE() << "accepted the nesting";
+  } catch (const DataError& e) {
+    EXPECT_TRUE(contains(e.message(), "nested more than 100 deep")) << e.what();
+  }
+}
+
+// A linear model's prediction costs terms × regressors per sample: 5,000 terms per axis
+// took minutes to evaluate. libsvm-format models have a term per column, as many as the
+// reader gives a fit.
+TEST(ModelFileErrors, TooManyTermsPerAxis) {
+  TempDir dir;
+  auto with_terms = [&](std::size_t count) {
+    DriftModel model = two_axis_model();
+    auto& axis = model.axes[0];
+    axis.pipeline.terms.clear();
+    for (std::size_t i = 0; i < count; ++i) axis.pipeline.terms.push_back(FeatureTerm::parse(fmt::format("lag:{}", i + 1)));
+    auto& linear = std::get<LinearModel>(axis.model);
+    linear.regressors = linear_regressors(count);
+    linear.coefficients = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(count), 0.5);
+    axis.fit.terms = axis.pipeline.term_names();
+    return to_json(model);
+  };
+  EXPECT_NO_THROW(load_drift_model(dir.write("most.json", with_terms(kMaxPipelineTerms).dump())));
+  const auto error = load_error(dir.write("many.json", with_terms(kMaxPipelineTerms + 1).dump()));
+  EXPECT_TRUE(contains(error.message(), "axis 1: 257 feature terms for one axis; at most 256 are allowed"))
+      << error.what();
+}
+
+// A subnormal feature_scale (5e-324) loaded, and every prediction was NaN: evaluate printed
+// NaN metrics, compensate wrote NaN rows and export put it in the C header. Every divisor
+// a model file gives is checked.
+TEST(ModelFileErrors, ScalesAndRatesTooSmallToDivideBy) {
+  const SvrModel svr = small_svr();
+  auto body = svr.to_json(kSvrTerms);
+  body["feature_scale"][1] = 5e-324;
+  EXPECT_EQ(refusal(body), "model.feature_scale[1] is 4.94066e-324: a scale must be at least 1e-12 (features are "
+                           "divided by it)");
+  body["feature_scale"][1] = 1e-13;
+  EXPECT_TRUE(contains(refusal(body), "model.feature_scale[1] is 1e-13")) << refusal(body);
+  body["feature_scale"][1] = kMinStandardScale;
+  EXPECT_EQ(refusal(body), "accepted");
+  body = svr.to_json(kSvrTerms);
+  body["target_scale"] = 5e-324;
+  EXPECT_TRUE(contains(refusal(body), "target_scale must be positive, at least 1e-12, not 4.94066e-324"))
+      << refusal(body);
+  body = svr.to_json(kSvrTerms);
+  body.erase("sigma");
+  body["gamma"] = 5e-324;
+  EXPECT_TRUE(contains(refusal(body), "gamma 4.94066e-324 is too small")) << refusal(body);
+
+  TempDir dir;
+  auto json = saved_json(dir);
+  json["rate_hz"] = 5e-324;
+  const auto error = load_error(dir.write("rate.json", json.dump()));
+  EXPECT_TRUE(contains(error.message(), "rate_hz is 4.94066e-324: a sampling rate must be at least 1e-12 Hz"))
+      << error.what();
+}
+
 TEST(ModelFileErrors, WrongNumberOfCoefficients) {
   TempDir dir;
   auto json = saved_json(dir);
@@ -425,26 +527,12 @@ TEST(ModelFileErrors, AbsurdNumbersDuplicateKeysAndDisagreeingSigma) {
   error = load_error(dir.write("twice.json", text));
   EXPECT_TRUE(contains(error.message(), "key \"gyro_unit\" appears twice in one object")) << error.what();
 
-  const std::vector<std::string> terms = {"dT", "rate"};
-  SvrModel svr;
-  svr.scaling = Standardization::identity(2);
-  svr.function.gamma = 0.5;
-  svr.function.coefficients = Eigen::VectorXd::Constant(1, 0.3);
-  svr.function.support_vectors = Eigen::MatrixXd::Constant(1, 2, 0.2);
-  svr.C = 10;
-  auto refusal = [&](const nlohmann::json& body) -> std::string {
-    try {
-      SvrModel::from_json(body, terms);
-    } catch (const Error& e) {
-      return e.what();
-    }
-    return "accepted";
-  };
-  EXPECT_EQ(refusal(svr.to_json(terms)), "accepted");
-  auto body = svr.to_json(terms);
+  const SvrModel svr = small_svr();
+  EXPECT_EQ(refusal(svr.to_json(kSvrTerms)), "accepted");
+  auto body = svr.to_json(kSvrTerms);
   body["target_scale"] = 0;
   EXPECT_TRUE(contains(refusal(body), "target_scale must be positive")) << refusal(body);
-  body = svr.to_json(terms);
+  body = svr.to_json(kSvrTerms);
   body["sigma"] = 3.0;
   EXPECT_TRUE(contains(refusal(body), "sigma 3 disagrees with gamma 0.5")) << refusal(body);
 }
