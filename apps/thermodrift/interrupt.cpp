@@ -24,9 +24,17 @@ extern "C" void on_interrupt(int signal_number) {
 }  // namespace
 
 void install_interrupt_handler() {
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  // Without SA_RESTART: a call blocked in the kernel (opening a FIFO nobody reads, a pipe
+  // that is full) returns EINTR at the first signal instead of waiting on past it.
+  struct sigaction action {};
+  action.sa_handler = on_interrupt;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = 0;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
 }
+
+bool interrupt_requested() { return interrupted.load(); }
 
 StopToken interrupt_token() { return StopToken(interrupted); }
 

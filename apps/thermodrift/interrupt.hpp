@@ -11,6 +11,9 @@ namespace thermodrift::cli {
 void install_interrupt_handler();
 // The token of the flag the handler sets (or set_interrupted).
 StopToken interrupt_token();
+// Whether that flag is set: an error met after it (a call the signal cut short) ends the
+// command as interrupted.
+bool interrupt_requested();
 // Sets or clears that flag without a signal: an embedding (the Python package) that runs
 // a command and catches Ctrl-C itself.
 void set_interrupted(bool interrupted);

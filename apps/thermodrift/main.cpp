@@ -47,17 +47,16 @@ int main(int argc, char** argv) {
       return status != 0 ? status : static_cast<int>(ExitStatus::failure);
     }
     return status;
-  } catch (const thermodrift::Interrupted& e) {
-    std::fprintf(stderr, "thermodrift: interrupted (%s); no output written\n", e.what());
-    return thermodrift::cli::interrupted_exit_status();
-  } catch (const thermodrift::UsageError& e) {
-    std::fprintf(stderr, "thermodrift: %s\n", e.what());
-    return static_cast<int>(ExitStatus::usage);
-  } catch (const thermodrift::DataError& e) {
-    std::fprintf(stderr, "thermodrift: %s\n", e.what());
-    return static_cast<int>(ExitStatus::bad_data);
   } catch (const std::exception& e) {
+    // After the first signal every error ends the command as interrupted: a call the
+    // signal cut short (EINTR, e.g. opening a FIFO nobody reads) fails with its own error.
+    if (dynamic_cast<const thermodrift::Interrupted*>(&e) != nullptr || thermodrift::cli::interrupt_requested()) {
+      std::fprintf(stderr, "thermodrift: interrupted (%s); no output written\n", e.what());
+      return thermodrift::cli::interrupted_exit_status();
+    }
     std::fprintf(stderr, "thermodrift: %s\n", e.what());
+    if (dynamic_cast<const thermodrift::UsageError*>(&e) != nullptr) return static_cast<int>(ExitStatus::usage);
+    if (dynamic_cast<const thermodrift::DataError*>(&e) != nullptr) return static_cast<int>(ExitStatus::bad_data);
     return static_cast<int>(ExitStatus::failure);
   }
 }

@@ -4,12 +4,17 @@
 // shared: this checks that the command stops, not how fast.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <csignal>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
 #include "../support/child_process.hpp"
+#include "../support/special_files.hpp"
 #include "../support/temp_dir.hpp"
 
 namespace thermodrift {
@@ -99,6 +104,68 @@ TEST(Cancel, FitWithTheGreedySearchStopsOnSigterm) {
                with_log({"fit", "--data", "chamber.csv", "--model", "svr", "--features", "auto", "--identify", "greedy",
                          "--out", "model.json"}),
                SIGTERM, 143);
+}
+
+// compensate asks every 4,096 rows: a SIGTERM during a shorter log was never seen, and the
+// output was written with exit 0. The log comes through a FIFO, half of it before the
+// signal and the rest after, so the signal is sure to arrive while the rows are read.
+TEST(Cancel, CompensateOfAShortLogStopsOnSigtermAndWritesNothing) {
+  TempDir dir;
+  ASSERT_EQ(testing::run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
+  ASSERT_EQ(testing::run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json").status, 0);
+  const std::string log = testing::read_file(dir.file("log.csv"));
+  ASSERT_LT(testing::split_lines(log).size(), 4096u);
+  const std::size_t half = log.find('\n', log.size() / 2) + 1;
+  testing::make_fifo(dir.file("pipe"));
+  std::vector<std::string> before = dir.entries();
+  ChildProcess child(dir, THERMODRIFT_BINARY, {"compensate", "--model", "m.json", "--data", "pipe", "--out", "c.csv"});
+  // Opened without blocking, and again until compensate has opened its end: a child that
+  // failed first makes the test fail, not hang.
+  int fifo = -1;
+  for (int attempt = 0; fifo < 0 && attempt < 1000 && child.running(); ++attempt) {
+    fifo = ::open(dir.file("pipe").c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fifo < 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_GE(fifo, 0) << child.stderr_text();
+  ::fcntl(fifo, F_SETFL, 0);
+  // A reader gone early must fail the test's writes, not end the test with SIGPIPE.
+  const auto previous = std::signal(SIGPIPE, SIG_IGN);
+  auto write_all = [&](std::string_view text) {
+    while (!text.empty()) {
+      const ssize_t written = ::write(fifo, text.data(), text.size());
+      if (written <= 0) return;
+      text.remove_prefix(static_cast<std::size_t>(written));
+    }
+  };
+  write_all(std::string_view(log).substr(0, half));
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  ASSERT_TRUE(child.running()) << child.stderr_text();
+  child.signal(SIGTERM);
+  write_all(std::string_view(log).substr(half));
+  ::close(fifo);
+  std::signal(SIGPIPE, previous);
+  const auto status = child.wait_for(std::chrono::seconds(30));
+  ASSERT_TRUE(status.has_value()) << "still running 30 s after the signal";
+  EXPECT_EQ(*status, 143) << child.stderr_text();
+  EXPECT_LT(child.seconds_to_stop(), kStopWithinSeconds) << child.stderr_text();
+  EXPECT_NE(child.stderr_text().find("interrupted (compensation stopped)"), std::string::npos) << child.stderr_text();
+  std::vector<std::string> after = dir.entries();
+  for (const char* child_output : {".stdout.child", ".stderr.child"}) {
+    std::erase(before, child_output);
+    std::erase(after, child_output);
+  }
+  EXPECT_EQ(after, before) << "something was left beside or at --out";
+}
+
+// Opening a FIFO that nobody reads blocks in the kernel: the first signal must end the
+// wait (the handler does not restart the call), not only a second one.
+TEST(Cancel, AnOutputFifoNobodyReadsStopsOnTheFirstSignal) {
+  TempDir dir;
+  ASSERT_EQ(testing::run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
+  ASSERT_EQ(testing::run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json").status, 0);
+  testing::make_fifo(dir.file("pipe"));
+  expect_stops(dir, {"export", "--model", "m.json", "--out", "pipe"}, SIGINT, 130);
+  expect_stops(dir, {"compensate", "--model", "m.json", "--data", "log.csv", "--out", "pipe"}, SIGTERM, 143);
 }
 
 TEST(Cancel, SimulateStopsOnCtrlCAndWritesNoLog) {
