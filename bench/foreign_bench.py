@@ -60,12 +60,12 @@ def law(seed, args):
         for name, test_columns in tests:
             path = os.path.join(folder, name.replace(" ", "_") + ".csv")
             fl.write_csv(test_columns, path)
-            paths.append((name, path, fl.noise_floor(test_columns, int(SETTLE_S)), SETTLE_S))
+            paths.append((name, path, fl.noise_floor(test_columns, int(SETTLE_S)), SETTLE_S, args.log_start))
         # A diagnostic beside the tests: cycle 2 judged with every state carried from cycle 1,
         # as a running compensator would carry it (the whole run, cycle 1 inside the settle).
         whole = os.path.join(folder, "whole_run.csv")
         fl.write_csv(columns, whole)
-        paths.append((CARRIED, whole, fl.noise_floor(columns, second + int(SETTLE_S)), second + SETTLE_S))
+        paths.append((CARRIED, whole, fl.noise_floor(columns, second + int(SETTLE_S)), second + SETTLE_S, "power-on"))
         for method in args.methods:
             model = os.path.join(folder, f"{method}.json")
             start = time.monotonic()
@@ -78,9 +78,9 @@ def law(seed, args):
                 continue
             seconds = time.monotonic() - start
             judged = {}
-            for name, path, floor, settle in paths:
+            for name, path, floor, settle, log_start in paths:
                 metrics = json.loads(run([args.thermodrift, "evaluate", "--model", model, "--data", path, *COLUMNS,
-                                          "--settle", str(settle), "--json"]))
+                                          "--settle", str(settle), "--log-start", log_start, "--json"]))
                 judged[name] = [a["mse_after"] / f for a, f in zip(metrics["axes"], floor)]
             result["methods"][method] = {
                 "seconds": seconds,
@@ -154,6 +154,9 @@ def main():
     parser.add_argument("--fit-option", action="append", default=[],
                         help="passed to fit as it stands, e.g. --fit-option=--node-channel=any")
     parser.add_argument("--without", default="", help="physics left out of every law (foreign_laws.draw_unit), a diagnostic")
+    parser.add_argument("--log-start", default="estimated", choices=["estimated", "power-on", "running"],
+                        help="evaluate --log-start of the test logs (the carried diagnostic starts at power-on); "
+                             "tables before 2026-11-28 were measured with power-on, then the default")
     parser.add_argument("--json")
     args = parser.parse_args()
     args.without = [w for w in args.without.split(",") if w]

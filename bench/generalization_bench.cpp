@@ -12,7 +12,7 @@
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
 //                                  [--cv-score geometric|pooled] [--min-gain X] [--training-noise K]
 //                                  [--bag B] [--training-quiet bias|gyro|all]
-//                                  [--json FILE]
+//                                  [--log-start power-on|running|estimated] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
 // is the training log, cycle 2 the "next cycle". Two other profiles of two distinct
@@ -128,6 +128,8 @@ struct Arguments {
   // the bias instability, without the gyro's noise, or without any noise (the thermometers'
   // too); the tests keep theirs: what the noise costs.
   std::string training_quiet;
+  // --log-start: where evaluate starts each test log but the carried one (evaluate's default)
+  LogStart log_start = LogStart::estimated;
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -152,7 +154,7 @@ Arguments parse(int argc, char** argv) {
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
                  "[--oracle-target gyro|drift] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
-                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--json FILE]\n",
+                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--log-start power-on|running|estimated] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
     }
@@ -168,6 +170,9 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--training-noise") args.training_noise = std::stoull(value);
     else if (flag == "--training-quiet" && (value == "bias" || value == "gyro" || value == "all")) {
       args.training_quiet = value;
+    }
+    else if (flag == "--log-start" && (value == "power-on" || value == "running" || value == "estimated")) {
+      args.log_start = value == "power-on" ? LogStart::power_on : value == "running" ? LogStart::running : LogStart::estimated;
     }
     else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
@@ -602,8 +607,14 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
         }
       }
       for (const auto& test : tests) {
-        auto metrics = test.carried_from_row ? evaluate_from(calibration.model, test.log, *test.carried_from_row)
-                                             : evaluate(calibration.model, {test.log}, settle_s);
+        std::vector<ResidualMetrics> metrics;
+        if (test.carried_from_row) {
+          metrics = evaluate_from(calibration.model, test.log, *test.carried_from_row);
+        } else {
+          for (const auto& axis : evaluate_axes(calibration.model, {test.log}, settle_s, {}, args.log_start)) {
+            metrics.push_back(axis.metrics);
+          }
+        }
         TestResult judged;
         for (std::size_t a = 0; a < 3; ++a) {
           // The judged rows' prediction, averaged over the bagged models (--bag): its MSE

@@ -474,11 +474,11 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("time_column",
                              [](const Model& self) { return self.model.time_column.value_or(std::string()); })
       .def("compensate", &compensate)
-      .def("evaluate", [](const Model& self, const py::list& frames, double settle, bool running) {
+      .def("evaluate", [](const Model& self, const py::list& frames, double settle, const std::string& start) {
         std::vector<ChamberLog> logs = to_logs(frames);
+        const LogStart log_start = cli::parse_log_start(start);
         const nlohmann::json result = run_interruptible([&](const StopToken& stop) {
-          return cli::evaluation_result(self.model, self.path, logs, settle, stop,
-                                        running ? LogStart::running : LogStart::power_on);
+          return cli::evaluation_result(self.model, self.path, logs, settle, stop, log_start);
         });
         return json_to_python(result);
       });

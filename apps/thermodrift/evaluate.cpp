@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <string_view>
 
 #include "commands.hpp"
@@ -22,7 +23,7 @@ struct EvaluateArguments {
   DataOptions data;
   std::string model_file;
   double settle = 0;
-  std::string log_start = "power-on";
+  std::optional<std::string> log_start;  // --log-start; estimated when not given
   bool json = false;
 };
 
@@ -32,10 +33,26 @@ nlohmann::json evaluation_header(const std::string& model_file, double settle, L
           {"model_file", model_file},
           {"evaluation", "on the given logs (held-out if the model was not fitted on them)"},
           {"settle_seconds", settle},
-          {"log_start", start == LogStart::running ? "running" : "power-on"}};
+          {"log_start", log_start_name(start)}};
 }
 
 }  // namespace
+
+LogStart parse_log_start(const std::string& name) {
+  if (name == "power-on") return LogStart::power_on;
+  if (name == "running") return LogStart::running;
+  if (name == "estimated") return LogStart::estimated;
+  throw UsageError(fmt::format("log start '{}' is not power-on, running or estimated", name));
+}
+
+std::string log_start_name(LogStart start) {
+  switch (start) {
+    case LogStart::power_on: return "power-on";
+    case LogStart::running: return "running";
+    case LogStart::estimated: return "estimated";
+  }
+  return {};
+}
 
 nlohmann::json evaluation_result(const DriftModel& model, const std::string& model_file,
                                  const std::vector<ChamberLog>& logs, double settle, const StopToken& stop,
@@ -62,7 +79,8 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
     // The lags start where a ramp history leaves them: no equilibrium to warn about.
   } else if (settle == 0 && longest > 0) {
     warn(fmt::format("the model's lags (longest {:g} s) start in equilibrium at the start of the log{}; if it starts "
-                     "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics{}",
+                     "mid-transient, --settle {:g} leaves the first {:g} s out of the metrics (and estimates the "
+                     "log's start from them){}",
                      longest, turn_on ? ", and its on:TAU terms take that start as power-on" : "", 3 * longest,
                      3 * longest, whole));
   } else if (settle < 3 * longest) {
@@ -78,6 +96,7 @@ nlohmann::json evaluation_result(const DriftModel& model, const std::string& mod
     nlohmann::json entry = evaluations[a].metrics.to_json();
     entry["name"] = axis.name;
     entry["model"] = axis.kind;
+    if (start == LogStart::estimated) entry["running_weight"] = evaluations[a].running_weight;
     if (const auto& outside = evaluations[a].outside_envelope) {
       entry["outside_envelope"] = outside->outside;
       entry["outside_envelope_fraction"] = outside->outside_fraction();
@@ -129,7 +148,9 @@ int run_evaluate(const EvaluateArguments& args) {
   nlohmann::json result;
   if (args.data.format == "libsvm") {
     if (args.data.files.size() != 1) throw UsageError("--format libsvm takes one --data file");
-    if (args.log_start != "power-on") throw UsageError("--log-start running needs logs in time, not --format libsvm");
+    if (args.log_start && *args.log_start != "power-on") {
+      throw UsageError(fmt::format("--log-start {} needs logs in time, not --format libsvm", *args.log_start));
+    }
     result = evaluation_header(args.model_file, args.settle, LogStart::power_on);
     result["axes"] = evaluate_libsvm_file(model, args.data.files.front());
   } else {
@@ -137,7 +158,7 @@ int run_evaluate(const EvaluateArguments& args) {
     for (const auto& axis : model.axes) warm_up = std::max(warm_up, axis.pipeline.warm_up_seconds());
     const auto logs = args.data.read(args.data.spec_for(model), warm_up, interrupt_token());
     result = evaluation_result(model, args.model_file, logs, args.settle, interrupt_token(),
-                               args.log_start == "running" ? LogStart::running : LogStart::power_on);
+                               parse_log_start(args.log_start.value_or("estimated")));
   }
   print_axes(result, args.json, fmt::format("{} on {}", args.model_file, fmt::join(args.data.files, ", ")));
   return 0;
@@ -154,11 +175,13 @@ Command add_evaluate(CLI::App& parent) {
                   "leave the first SECONDS of each log (and after each gap) out of the metrics, while lags settle")
       ->check(kNonNegative);
   app->add_option("--log-start", args->log_start,
-                  "where each log starts: at power-on (power-on, default: the lags start in equilibrium at its first "
-                  "row) or cut from a running recording (running: each thermometer's initial line, held within its "
-                  "range, runs for 6 h before the log, and --settle counts from its first row)")
-      ->check(CLI::IsMember({"power-on", "running"}))
-      ->option_text("power-on|running");
+                  "where each log starts: at power-on (power-on: the lags start in equilibrium at its first row), "
+                  "cut from a running recording (running: each thermometer's initial line, held within its range, "
+                  "runs for 6 h before the log, and --settle counts from its first row), or between the two as the "
+                  "--settle rows, which are not judged, say (estimated, the default: per axis and log, the weight of "
+                  "running's prediction in [0, 1] that fits them best; without --settle, power-on)")
+      ->check(CLI::IsMember({"power-on", "running", "estimated"}))
+      ->option_text("power-on|running|estimated");
   app->add_flag("--json", args->json, "print one JSON object on stdout");
   return {app, [args] { return run_evaluate(*args); }};
 }

@@ -1,6 +1,7 @@
 #include "output.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cstdio>
 
@@ -108,6 +109,11 @@ void print_axes(const nlohmann::json& result, bool as_json, const std::string& t
                  from.find("leave-one-run-out") != std::string::npos
                      ? "each run predicted by a model of the others"
                      : "within this log's kind of programme — another programme can be worse");
+    }
+    if (axis.contains("running_weight") && result.value("settle_seconds", 0.0) > 0) {
+      fmt::print("{} start of the log, estimated from its settling rows: weight of a running start {:.2g} (0: "
+                 "power-on, 1: running)\n",
+                 name, fmt::join(axis["running_weight"].get<std::vector<double>>(), ", "));
     }
     if (axis.contains("outside_envelope")) {
       fmt::print("{} outside the training envelope: {} of {} samples ({:.1f} %)\n", name,

@@ -114,7 +114,7 @@ def test_evaluate_matches_evaluate_json(logs, tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", td.ThermodriftWarning)
         results = {start: model.evaluate(td.read_log(test, temp=TEMPS), settle=1800, log_start=start)
-                   for start in ("power-on", "running")}
+                   for start in ("power-on", "running", "estimated")}
     for start, result in results.items():
         expected = json.loads(cli("evaluate", "--model", tmp_path / "m.json", "--data", test, "--settle", 1800,
                                   "--log-start", start, "--json").stdout)

@@ -360,15 +360,17 @@ class DriftModel:
         drift, _, _ = self._run(data, gyro, temp, time, rate)
         return pd.DataFrame(drift, columns=self._core.axes, index=data.index)
 
-    def evaluate(self, data, settle=0, gyro=None, temp=None, time=None, rate=None, log_start="power-on"):
+    def evaluate(self, data, settle=0, gyro=None, temp=None, time=None, rate=None, log_start="estimated"):
         """Metrics on a DataFrame (or a list: several runs), as ``evaluate --json``;
-        ``log_start="running"`` for a log cut from a running recording (``--log-start``)."""
+        ``log_start`` as ``--log-start``: ``"estimated"`` (the default: between power-on and a
+        running start, as the settling rows say), ``"power-on"`` or ``"running"`` (a log cut
+        from a running recording)."""
         if not settle >= 0:
             raise UsageError(f"settle must be a non-negative number of seconds, not {settle}")
-        if log_start not in ("power-on", "running"):
-            raise UsageError(f"log_start must be 'power-on' or 'running', not {log_start!r}")
+        if log_start not in ("power-on", "running", "estimated"):
+            raise UsageError(f"log_start must be 'power-on', 'running' or 'estimated', not {log_start!r}")
         frames = _logs(self._core, data, dict(gyro=gyro, temp=temp, time=time, rate=rate))
-        return self._core.evaluate(frames, float(settle), log_start == "running")
+        return self._core.evaluate(frames, float(settle), log_start)
 
     def __repr__(self):
         kinds = ", ".join(f"{axis}: {kind} ({len(terms)} terms)"

@@ -770,16 +770,62 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
   return metrics;
 }
 
+namespace {
+
+// An axis model's prediction of a table's rows, in blocks, so that a stop request is seen
+// during an SVR's prediction of a long log.
+Eigen::VectorXd predict_rows(const AxisModel& axis_model, const Eigen::MatrixXd& features, const StopToken& stop) {
+  constexpr Eigen::Index kBlock = 4096;
+  Eigen::VectorXd predicted(features.rows());
+  for (Eigen::Index begin = 0; begin < features.rows(); begin += kBlock) {
+    stop.throw_if_requested("evaluation");
+    const Eigen::Index count = std::min(kBlock, features.rows() - begin);
+    predicted.segment(begin, count) = axis_model.predict(features.middleRows(begin, count));
+  }
+  return predicted;
+}
+
+// LogStart::estimated on one log: power-on's prediction of `on`'s rows moved by w times the
+// running start's difference from it (`running`: the table after the ramp history, its
+// rows the log's own), w fitted on the rows before `settle_seconds`. Returns w.
+double blend_starts(const AxisModel& axis_model, const FeatureTable& on, const FeatureTable& running,
+                    double settle_seconds, const StopToken& stop, Eigen::VectorXd& predicted) {
+  predicted = predict_rows(axis_model, on.features, stop);
+  const Eigen::VectorXd other = predict_rows(axis_model, running.features, stop);
+  Eigen::VectorXd difference = Eigen::VectorXd::Zero(predicted.size());
+  for (std::size_t i = 0, j = 0; i < on.rows(); ++i) {
+    while (j < running.rows() && running.row[j] < on.row[i]) ++j;
+    if (j < running.rows() && running.row[j] == on.row[i]) {
+      const double value = other[static_cast<Eigen::Index>(j)] - predicted[static_cast<Eigen::Index>(i)];
+      // A start whose prediction overflows says nothing; power-on's own stays as it is.
+      if (std::isfinite(value)) difference[static_cast<Eigen::Index>(i)] = value;
+    }
+  }
+  double cross = 0, square = 0;
+  for (std::size_t i = 0; i < on.rows() && on.since_start[i] < settle_seconds; ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    cross += difference[k] * (on.target[k] - predicted[k]);
+    square += difference[k] * difference[k];
+  }
+  const double weight = square > 0 && std::isfinite(cross / square) ? std::clamp(cross / square, 0.0, 1.0) : 0.0;
+  predicted += weight * difference;
+  return weight;
+}
+
+}  // namespace
+
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                           double settle_seconds, const StopToken& stop, LogStart start) {
-  std::vector<ChamberLog> histories;  // LogStart::running: each log after its ramp history
-  if (start == LogStart::running) {
+  std::vector<ChamberLog> histories;  // LogStart::running and estimated: each log after its ramp history
+  if (start != LogStart::power_on) {
     for (const auto& log : logs) histories.push_back(with_ramp_history(log));
   }
   std::vector<AxisEvaluation> evaluations;
   for (std::size_t axis = 0; axis < model.axes.size(); ++axis) {
     const auto& axis_model = model.axes[axis];
+    AxisEvaluation evaluation;
     FeatureTable table;
+    std::vector<double> predicted;
     for (std::size_t l = 0; l < logs.size(); ++l) {
       const ChamberLog& log = logs[l];
       stop.throw_if_requested("evaluation");
@@ -789,14 +835,31 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
                                     model.axes.size(), log.axes()));
       }
       const auto channel = temperature_channel_per_axis(log).at(axis);
-      FeatureTable part = histories.empty()
-                              ? build_feature_table(axis_model.pipeline, log, axis, channel, false)
-                              : own_rows(build_feature_table(axis_model.pipeline, histories[l], axis, channel, false),
-                                         histories[l].rows() - log.rows(), log.time.front() - histories[l].time.front());
-      // After a history the first rows are ready, but their smoothed gyro still averages the
-      // history's made-up one: the log's own warm-up stays out, as without it.
-      const double settle = histories.empty() ? settle_seconds
-                                              : std::max(settle_seconds, axis_model.pipeline.warm_up_seconds());
+      const auto after_history = [&] {
+        return own_rows(build_feature_table(axis_model.pipeline, histories[l], axis, channel, false),
+                        histories[l].rows() - log.rows(), log.time.front() - histories[l].time.front());
+      };
+      FeatureTable part;
+      Eigen::VectorXd part_predicted;
+      double settle = settle_seconds;
+      if (start == LogStart::running) {
+        part = after_history();
+        // After a history the first rows are ready, but their smoothed gyro still averages the
+        // history's made-up one: the log's own warm-up stays out, as without it.
+        settle = std::max(settle_seconds, axis_model.pipeline.warm_up_seconds());
+        part_predicted = predict_rows(axis_model, part.features, stop);
+      } else {
+        part = build_feature_table(axis_model.pipeline, log, axis, channel, false);
+        if (start == LogStart::estimated) {
+          evaluation.running_weight.push_back(
+              blend_starts(axis_model, part, after_history(), settle_seconds, stop, part_predicted));
+        } else {
+          part_predicted = predict_rows(axis_model, part.features, stop);
+        }
+      }
+      for (std::size_t i = 0; i < part.rows(); ++i) {
+        if (!(part.since_start[i] < settle)) predicted.push_back(part_predicted[static_cast<Eigen::Index>(i)]);
+      }
       if (settle > 0) part = settled_rows(part, settle);
       append_rows(table, part);
     }
@@ -805,18 +868,10 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
                       fmt::format("no usable samples after the {:g} s warm-up{}", axis_model.pipeline.warm_up_seconds(),
                                   settle_seconds > 0 ? fmt::format(" and {:g} s of settling", settle_seconds) : ""));
     }
-    // In blocks, so that a stop request is seen during an SVR's prediction of a long log.
-    constexpr Eigen::Index kBlock = 4096;
-    Eigen::VectorXd predicted(table.features.rows());
-    for (Eigen::Index begin = 0; begin < table.features.rows(); begin += kBlock) {
-      stop.throw_if_requested("evaluation");
-      const Eigen::Index count = std::min(kBlock, table.features.rows() - begin);
-      predicted.segment(begin, count) = axis_model.predict(table.features.middleRows(begin, count));
-    }
-    AxisEvaluation evaluation;
-    evaluation.metrics = residual_metrics(table.target, predicted);
+    evaluation.metrics =
+        residual_metrics(table.target, Eigen::Map<const Eigen::VectorXd>(predicted.data(), static_cast<Eigen::Index>(predicted.size())));
     if (axis_model.envelope) evaluation.outside_envelope = tally_outside(*axis_model.envelope, table);
-    evaluations.push_back(evaluation);
+    evaluations.push_back(std::move(evaluation));
   }
   return evaluations;
 }

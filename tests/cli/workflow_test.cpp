@@ -457,10 +457,11 @@ TEST_F(Workflow, GradTermsReadAnExtraTemperatureColumnByName) {
 }
 
 // The second cycle cut from the recording starts mid-transient, its lags in equilibrium
-// where the unit's are not. `--log-start running` streams it after a ramp history, and its
-// figures come closer to the whole recording's on the same rows (the lags carried through
-// the first cycle) than the cut log's do.
-TEST_F(Workflow, RunningLogStartComesCloserToTheWholeRecording) {
+// where the unit's are not. `--log-start running` streams it after a ramp history, and
+// `estimated` weighs that start by the settling rows; the figures of both come closer to the
+// whole recording's on the same rows (the lags carried through the first cycle) than the
+// cut log's started at power-on do.
+TEST_F(Workflow, RunningAndEstimatedLogStartsComeCloserToTheWholeRecording) {
   copy(cycle1_, "cycle1.csv");
   copy(cycle2_, "cycle2.csv");
   copy(shared_->file("sim.csv"), "whole.csv");
@@ -475,9 +476,10 @@ TEST_F(Workflow, RunningLogStartComesCloserToTheWholeRecording) {
     EXPECT_EQ(result.status, 0) << result.err;
     return std::make_pair(nlohmann::json::parse(result.out), result.err);
   };
-  const auto [cut, cut_err] = evaluate("--data cycle2.csv --settle 1800");
+  const auto [cut, cut_err] = evaluate("--data cycle2.csv --settle 1800 --log-start power-on");
   const auto [running, running_err] = evaluate("--data cycle2.csv --settle 1800 --log-start running");
-  const auto [whole, whole_err] = evaluate(fmt::format("--data whole.csv --settle {}", kCycleSeconds + 1800));
+  const auto [whole, whole_err] =
+      evaluate(fmt::format("--data whole.csv --settle {} --log-start power-on", kCycleSeconds + 1800));
   EXPECT_EQ(cut["log_start"], "power-on");
   EXPECT_EQ(running["log_start"], "running");
   EXPECT_TRUE(contains(cut_err, "--log-start running")) << cut_err;  // the settle warning names the remedy
@@ -497,12 +499,37 @@ TEST_F(Workflow, RunningLogStartComesCloserToTheWholeRecording) {
   for (std::size_t a = 0; a < 3; ++a) {
     EXPECT_EQ(unsettled_running["axes"][a]["samples"], unsettled["axes"][a]["samples"]);
   }
+  // --log-start estimated: per axis, the weight of running's prediction that fits the
+  // settling rows. On the cut log it comes closer to the whole recording than power-on does;
+  // on a log that starts at power-on it changes next to nothing; without settling rows it is
+  // power-on.
+  const auto [estimated, estimated_err] = evaluate("--data cycle2.csv --settle 1800 --log-start estimated");
+  const auto [on_whole, on_whole_err] = evaluate("--data whole.csv --settle 1800 --log-start power-on");
+  const auto [estimated_whole, estimated_whole_err] = evaluate("--data whole.csv --settle 1800 --log-start estimated");
+  const auto [estimated_unsettled, estimated_unsettled_err] = evaluate("--data cycle2.csv --log-start estimated");
+  EXPECT_EQ(estimated["log_start"], "estimated");
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto& weights = estimated["axes"][a]["running_weight"];
+    ASSERT_EQ(weights.size(), 1u);
+    EXPECT_GE(weights[0].get<double>(), 0.0);
+    EXPECT_LE(weights[0].get<double>(), 1.0);
+    EXPECT_EQ(estimated["axes"][a]["samples"], cut["axes"][a]["samples"]);
+    const double carried = whole["axes"][a]["mse_after"].get<double>();
+    const double from_cut = std::abs(std::log(cut["axes"][a]["mse_after"].get<double>() / carried));
+    EXPECT_LT(std::abs(std::log(estimated["axes"][a]["mse_after"].get<double>() / carried)), from_cut) << "axis " << a;
+    const double powered_on = on_whole["axes"][a]["mse_after"].get<double>();
+    EXPECT_NEAR(estimated_whole["axes"][a]["mse_after"].get<double>(), powered_on, 0.05 * powered_on) << "axis " << a;
+    EXPECT_EQ(estimated_unsettled["axes"][a]["running_weight"][0].get<double>(), 0.0);
+    EXPECT_EQ(estimated_unsettled["axes"][a]["mse_after"], unsettled["axes"][a]["mse_after"]);
+  }
   // libsvm-format data has no time to put a history before.
   dir_.write("one.libsvm", "0.5 1:0.1\n");
-  const auto libsvm =
-      run_thermodrift(dir_, "evaluate --model node.json --data one.libsvm --format libsvm --log-start running");
-  EXPECT_EQ(libsvm.status, 2) << libsvm.err;
-  expect_one_line(libsvm);
+  for (const std::string start : {"running", "estimated"}) {
+    const auto libsvm =
+        run_thermodrift(dir_, "evaluate --model node.json --data one.libsvm --format libsvm --log-start " + start);
+    EXPECT_EQ(libsvm.status, 2) << libsvm.err;
+    expect_one_line(libsvm);
+  }
 }
 
 }  // namespace

@@ -196,12 +196,18 @@ std::vector<ResidualMetrics> evaluate(const DriftModel& model, const std::vector
 struct AxisEvaluation {
   ResidualMetrics metrics;
   std::optional<EnvelopeTally> outside_envelope;  // when the model file has an envelope
+  // LogStart::estimated: per log, the weight of the running start (0: power-on, 1: running)
+  // its settling rows chose.
+  std::vector<double> running_weight;
 };
 // Where a log starts (evaluate --log-start). `power_on`: the lags start in equilibrium at its
 // first row, as a unit switched on there is. `running`: the log is cut from a longer
 // recording, so each log is streamed after the history with_ramp_history gives it, and its
-// settling counts from its own first row.
-enum class LogStart { power_on, running };
+// settling counts from its own first row. `estimated`: the prediction is power-on's plus a
+// weight w in [0, 1] times (running's - power-on's), w the least-squares fit of that
+// difference to power-on's residual on the log's settling rows (ready, before
+// `settle_seconds`), which are not judged; without settling rows w is 0 (power-on).
+enum class LogStart { power_on, running, estimated };
 // `stop` is asked per axis and log and every 4096 predicted samples (Interrupted).
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                           double settle_seconds = 0, const StopToken& stop = {},
