@@ -54,7 +54,7 @@ void DataOptions::add_to(CLI::App& app, bool data_required) {
   app.add_option("--rate", rate,
                  "sampling rate in Hz, for a log without a time column (a time column is then not read; not with "
                  "--time)")
-      ->check(kPositive);
+      ->check(kSampleRate);
   add_list_option(app, "--gyro", gyro, "gyro column(s), one model per axis");
   add_list_option(app, "--temp", temperature,
                   "temperature column(s): one for all axes or one per axis, then any extra channels grad:A-B terms read");

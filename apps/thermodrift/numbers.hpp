@@ -37,6 +37,10 @@ inline CLI::Validator finite_at_least(double low, bool strict, const std::string
 
 // A finite number > 0 (rates, spans, C, σ, counts).
 inline const CLI::Validator kPositive = detail::finite_at_least(0, true, "a finite number above 0");
+// A log's sampling rate (Hz): a row's time is its number over it, so a subnormal rate made
+// every time infinite. The floor is a model file's (rate_hz at least 1e-12 Hz).
+inline const CLI::Validator kSampleRate =
+    detail::finite_at_least(1e-12, false, "a finite number of hertz of at least 1e-12", HUGE_VAL, "POSITIVE");
 // The SVR's C and γ: above 0 and within the ±1e12 every number of a model file stays
 // within (a larger one is refused at load: it is a failed fit or an edited file).
 inline const CLI::Validator kModelScale = detail::finite_at_least(0, true, "a finite number above 0 and at most 1e12", 1e12);

@@ -28,6 +28,14 @@ TEST(OptionChecks, NanInfinityAndJunkAreUsageErrors) {
     EXPECT_LT(result.err.size(), 200u) << result.err;
     EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
   }
+  // A rate so small that a row's time (its number over the rate) is infinite.
+  const auto tiny_rate = run_thermodrift(dir, "fit --data log.csv --gyro 6 --temp 3 --model linear --out m.json "
+                                              "--rate 5e-324");
+  EXPECT_EQ(tiny_rate.status, 2);
+  EXPECT_NE(tiny_rate.err.find("--rate: expected a finite number of hertz of at least 1e-12, not '5e-324'"),
+            std::string::npos)
+      << tiny_rate.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.json")));
   ASSERT_EQ(run_thermodrift(dir, fit).status, 0);
   const auto settle = run_thermodrift(dir, "evaluate --model m.json --data log.csv --settle nan");
   EXPECT_EQ(settle.status, 2);
