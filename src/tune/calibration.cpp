@@ -221,6 +221,10 @@ Pipeline search_pipeline(const Pipeline& full, const std::vector<ChamberLog>& lo
   return pipeline;
 }
 
+// The smallest temperature span (°C, of the smoothed thermometer over the training logs)
+// --features auto identifies terms on: a chamber programme spans tens of degrees.
+constexpr double kMinIdentifiableSpanC = 1.0;
+
 // The least-squares search of one axis, after the same check of the data a fit makes
 // (too short a log says so in terms of the warm-up, not of folds). `logs` are
 // logs_for_search's, `pipeline` search_pipeline's.
@@ -229,7 +233,19 @@ FeatureSelection search_features(const std::vector<ChamberLog>& logs, std::size_
   FeatureSelectionOptions options = calibration.selection;  // its own folds, not the tuning's
   options.folds_by = calibration.folds_by;
   options.stop = calibration.stop;
-  require_samples(feature_table(logs, pipeline, axis, true), pipeline, logs, 4 * static_cast<std::size_t>(options.folds));
+  const FeatureTable table = feature_table(logs, pipeline, axis, true);
+  require_samples(table, pipeline, logs, 4 * static_cast<std::size_t>(options.folds));
+  // A log whose thermometer hardly moves holds no thermal dynamics: the search then picks
+  // columns of almost nothing, and their coefficients (beyond 1e12 on a 999.9 °C soak)
+  // made fit fail only at saving, as if the tool had failed.
+  const auto [coldest, hottest] = std::minmax_element(table.temperature.begin(), table.temperature.end());
+  if (*hottest - *coldest < kMinIdentifiableSpanC) {
+    throw DataError(logs.front().source, 0, 0,
+                    fmt::format("axis {}: its temperature spans {:.3g} °C ({:.4g} to {:.4g}): --features auto needs a "
+                                "log whose temperature moves by at least {:g} °C (a chamber programme); name the "
+                                "terms with --features instead",
+                                axis + 1, *hottest - *coldest, *coldest, *hottest, kMinIdentifiableSpanC));
+  }
   if (calibration.selection_progress) calibration.selection_progress(axis, "choosing feature terms");
   if (options.method == FeatureSelectionOptions::Method::greedy) return select_features(logs, axis, pipeline, options);
   return identify_thermal_node(logs, axis, pipeline, options);

@@ -57,6 +57,31 @@ TEST_F(ClearMessages, AHeaderNamingAColumnTwice) {
   EXPECT_FALSE(std::filesystem::exists(dir_.file("c.csv")));
 }
 
+// A log whose thermometers never move (a 999.9 °C soak): --features auto found columns
+// of almost nothing and coefficients beyond 1e12, and fit failed at saving with exit 1, as
+// if the tool had failed. It is the data: exit 3, naming the span and the remedy.
+TEST_F(ClearMessages, FeaturesAutoOnAConstantTemperature) {
+  std::string text = read_file(dir_.file("log.csv"));
+  const auto lines = split_lines(text);
+  std::string constant = lines.front() + "\n";
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    std::vector<std::string> cells;
+    for (std::size_t begin = 0;;) {
+      const auto end = lines[i].find(',', begin);
+      cells.push_back(lines[i].substr(begin, end - begin));
+      if (end == std::string::npos) break;
+      begin = end + 1;
+    }
+    for (std::size_t c = 1; c <= 4; ++c) cells[c] = "999.9";  // temp_chamber, temp_x, temp_y, temp_z
+    for (std::size_t c = 0; c < cells.size(); ++c) constant += (c == 0 ? "" : ",") + cells[c];
+    constant += "\n";
+  }
+  dir_.write("soak.csv", constant);
+  expect_refused("fit --data soak.csv --temp temp_x,temp_y,temp_z --model linear --features auto --out m.json", 3,
+                 "soak.csv: axis 1: its temperature spans 0 °C (999.9 to 999.9): --features auto needs a log whose "
+                 "temperature moves by at least 1 °C");
+}
+
 // Numbers in a list: an empty item was dropped (two scales for three columns), and a
 // word or NaN is named for what it is.
 TEST_F(ClearMessages, EmptyOrJunkItemsInNumberLists) {
