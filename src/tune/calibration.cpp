@@ -832,8 +832,10 @@ double blend_starts(const AxisModel& axis_model, const FeatureTable& on, const F
 
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                           double settle_seconds, const StopToken& stop, LogStart start) {
-  std::vector<ChamberLog> histories;  // LogStart::running and estimated: each log after its ramp history
-  if (start != LogStart::power_on) {
+  // Without settling rows the estimated start is power-on (w = 0): no history to stream.
+  const bool blend = start == LogStart::estimated && settle_seconds > 0;
+  std::vector<ChamberLog> histories;  // LogStart::running and a blend: each log after its ramp history
+  if (start == LogStart::running || blend) {
     for (const auto& log : logs) histories.push_back(with_ramp_history(log));
   }
   std::vector<AxisEvaluation> evaluations;
@@ -866,10 +868,11 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
         part_predicted = predict_rows(axis_model, part.features, stop);
       } else {
         part = build_feature_table(axis_model.pipeline, log, axis, channel, false);
-        if (start == LogStart::estimated) {
+        if (blend) {
           evaluation.running_weight.push_back(
               blend_starts(axis_model, part, after_history(), settle_seconds, stop, part_predicted));
         } else {
+          if (start == LogStart::estimated) evaluation.running_weight.push_back(0.0);
           part_predicted = predict_rows(axis_model, part.features, stop);
         }
       }

@@ -74,25 +74,29 @@ void expect_refused_at_load(const TempDir& dir, const std::string& model, const 
   EXPECT_FALSE(std::filesystem::exists(dir.file("m.h")));
 }
 
+// log.csv (one cycle at 0.1 Hz) simulated in `dir`, m.json fitted on its x axis with
+// `model` (the --model options), and the file's text.
+std::string fitted_model_text(const TempDir& dir, const std::string& model) {
+  EXPECT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
+  EXPECT_EQ(run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model " + model + " --out m.json").status, 0);
+  return read_file(dir.file("m.json"));
+}
+
+// `text` with the first number after `key` replaced by `value`.
+std::string with_number_after(std::string text, const std::string& key, const std::string& value) {
+  const auto at = text.find(key);
+  EXPECT_NE(at, std::string::npos) << key;
+  if (at == std::string::npos) return text;
+  const auto begin = text.find_first_of("-0123456789", at + key.size());
+  return text.replace(begin, text.find_first_of(",\n]}", begin) - begin, value);
+}
+
 TEST(Plausibility, AModelWithAbsurdNumbersIsRefusedAtLoad) {
   TempDir dir;
-  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
-  ASSERT_EQ(run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model linear --out m.json").status, 0);
-  std::string text = read_file(dir.file("m.json"));
-  const auto at = text.find("\"intercept\": ");
-  ASSERT_NE(at, std::string::npos);
-  const auto end = text.find_first_of(",\n}", at + 13);
-  text.replace(at + 13, end - at - 13, "1e308");
-  dir.write("huge.json", text);
+  dir.write("huge.json", with_number_after(fitted_model_text(dir, "linear"), "\"intercept\": ", "1e308"));
   expect_refused_at_load(dir, "huge.json", "huge.json: axis 1: model.intercept is 1e+308, beyond");
-  EXPECT_FALSE(std::filesystem::exists(dir.file("m.h")));
   // Within ±1e12 but no temperature: a reference of 1e11 °C made compensate write 1.6e12 °/h.
-  std::string hot = read_file(dir.file("m.json"));
-  const auto reference = hot.find("\"reference_temperature\": ");
-  ASSERT_NE(reference, std::string::npos);
-  const auto value = reference + 25;
-  hot.replace(value, hot.find_first_of(",\n}", value) - value, "1e11");
-  dir.write("hot.json", hot);
+  dir.write("hot.json", with_number_after(read_file(dir.file("m.json")), "\"reference_temperature\": ", "1e11"));
   const auto result = run_thermodrift(dir, "compensate --model hot.json --data log.csv --out c.csv");
   EXPECT_EQ(result.status, 3) << result.err;
   EXPECT_TRUE(contains(result.err, "reference temperature 1e+11 °C is beyond -273.15..1000 °C")) << result.err;
@@ -127,14 +131,8 @@ TEST(Plausibility, ADeeplyNestedModelIsRefusedAndLeavesNothing) {
 // wrote NaN in every row and export put it in the C header, all with exit 0.
 TEST(Plausibility, ASubnormalScaleIsRefusedAtLoad) {
   TempDir dir;
-  ASSERT_EQ(run_thermodrift(dir, "simulate --cycles 1 --rate 0.1 --out log.csv").status, 0);
-  ASSERT_EQ(run_thermodrift(dir, "fit --data log.csv --gyro gyro_x --temp temp_x --model svr --C 10 --sigma 1 --out m.json").status, 0);
-  std::string text = read_file(dir.file("m.json"));
-  const auto at = text.find("\"feature_scale\": [");
-  ASSERT_NE(at, std::string::npos);
-  const auto value = text.find_first_of("-0123456789", at + 18);
-  text.replace(value, text.find_first_of(",\n]", value) - value, "5e-324");
-  dir.write("tiny.json", text);
+  dir.write("tiny.json",
+            with_number_after(fitted_model_text(dir, "svr --C 10 --sigma 1"), "\"feature_scale\": [", "5e-324"));
   expect_refused_at_load(dir, "tiny.json",
                          "tiny.json: axis 1: model.feature_scale[0] is 4.94066e-324: a scale must be at least 1e-12");
 }
