@@ -171,9 +171,7 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--training-quiet" && (value == "bias" || value == "gyro" || value == "all")) {
       args.training_quiet = value;
     }
-    else if (flag == "--log-start" && (value == "power-on" || value == "running" || value == "estimated")) {
-      args.log_start = value == "power-on" ? LogStart::power_on : value == "running" ? LogStart::running : LogStart::estimated;
-    }
+    else if (flag == "--log-start") args.log_start = parse_log_start(value);
     else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
     else if (flag == "--cv-score" && (value == "geometric" || value == "pooled")) {

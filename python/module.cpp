@@ -476,7 +476,7 @@ PYBIND11_MODULE(_core, m) {
       .def("compensate", &compensate)
       .def("evaluate", [](const Model& self, const py::list& frames, double settle, const std::string& start) {
         std::vector<ChamberLog> logs = to_logs(frames);
-        const LogStart log_start = cli::parse_log_start(start);
+        const LogStart log_start = parse_log_start(start);
         const nlohmann::json result = run_interruptible([&](const StopToken& stop) {
           return cli::evaluation_result(self.model, self.path, logs, settle, stop, log_start);
         });

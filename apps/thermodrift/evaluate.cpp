@@ -38,22 +38,6 @@ nlohmann::json evaluation_header(const std::string& model_file, double settle, L
 
 }  // namespace
 
-LogStart parse_log_start(const std::string& name) {
-  if (name == "power-on") return LogStart::power_on;
-  if (name == "running") return LogStart::running;
-  if (name == "estimated") return LogStart::estimated;
-  throw UsageError(fmt::format("log start '{}' is not power-on, running or estimated", name));
-}
-
-std::string log_start_name(LogStart start) {
-  switch (start) {
-    case LogStart::power_on: return "power-on";
-    case LogStart::running: return "running";
-    case LogStart::estimated: return "estimated";
-  }
-  return {};
-}
-
 nlohmann::json evaluation_result(const DriftModel& model, const std::string& model_file,
                                  const std::vector<ChamberLog>& logs, double settle, const StopToken& stop,
                                  LogStart start) {

@@ -18,10 +18,6 @@ namespace thermodrift::cli {
 // left out), per axis with the envelope tally and the noise-floor estimate, and per log
 // when there are several. Warnings (samples outside the envelope, settling) go to warn().
 // `start`: where the logs start (evaluate --log-start; evaluate_axes).
-// evaluate --log-start's names: power-on, running, estimated (UsageError for any other).
-LogStart parse_log_start(const std::string& name);
-std::string log_start_name(LogStart start);
-
 nlohmann::json evaluation_result(const DriftModel& model, const std::string& model_file,
                                  const std::vector<ChamberLog>& logs, double settle, const StopToken& stop,
                                  LogStart start = LogStart::power_on);

@@ -830,6 +830,22 @@ double blend_starts(const AxisModel& axis_model, const FeatureTable& on, const F
 
 }  // namespace
 
+LogStart parse_log_start(const std::string& name) {
+  if (name == "power-on") return LogStart::power_on;
+  if (name == "running") return LogStart::running;
+  if (name == "estimated") return LogStart::estimated;
+  throw UsageError(fmt::format("log start '{}' is not power-on, running or estimated", name));
+}
+
+std::string log_start_name(LogStart start) {
+  switch (start) {
+    case LogStart::power_on: return "power-on";
+    case LogStart::running: return "running";
+    case LogStart::estimated: return "estimated";
+  }
+  return {};
+}
+
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                           double settle_seconds, const StopToken& stop, LogStart start) {
   // Without settling rows the estimated start is power-on (w = 0): no history to stream.

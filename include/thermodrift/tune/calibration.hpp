@@ -208,6 +208,9 @@ struct AxisEvaluation {
 // difference to power-on's residual on the log's settling rows (ready, before
 // `settle_seconds`), which are not judged; without settling rows w is 0 (power-on).
 enum class LogStart { power_on, running, estimated };
+// Their names, as evaluate --log-start takes them (UsageError for any other).
+LogStart parse_log_start(const std::string& name);
+std::string log_start_name(LogStart start);
 // `stop` is asked per axis and log and every 4096 predicted samples (Interrupted).
 std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::vector<ChamberLog>& logs,
                                           double settle_seconds = 0, const StopToken& stop = {},
