@@ -140,7 +140,17 @@ Destination resolve(const std::string& path) {
     current = folder / current.filename();
     if (folder.string().starts_with("/proc/")) return {"", open_through_proc(path, folder, current.filename())};
     struct stat link {};
-    if (::lstat(current.c_str(), &link) != 0 || !S_ISLNK(link.st_mode)) return {current.string()};
+    if (::lstat(current.c_str(), &link) != 0) return {current.string()};
+    if (!S_ISLNK(link.st_mode)) {
+      // Renaming needs only the folder's permission; a file its owner made read-only is
+      // kept as `cp` would keep it (root may write any file, and does).
+      if (::access(current.c_str(), W_OK) != 0 && errno == EACCES) {
+        throw Error(fmt::format("cannot write {}: the file is read-only; make it writable or choose another "
+                                "output",
+                                path));
+      }
+      return {current.string()};
+    }
     const fs::path next = fs::read_symlink(current, error);
     if (error) throw Error(fmt::format("cannot read the link {}: {}", current.string(), error.message()));
     current = next.is_absolute() ? next : folder / next;

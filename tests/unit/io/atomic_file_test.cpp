@@ -66,6 +66,35 @@ TEST(AtomicFile, AReplacedFileKeepsItsPermissions) {
             fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read | fs::perms::others_read);
 }
 
+// Renaming needs only the folder's permission, so a model its owner made read-only was
+// replaced. It is kept now, with an error. Root may write any file (as `cp` does), so the
+// write runs in a child that drops to nobody when the tests run as root.
+TEST(AtomicFile, AReadOnlyFileIsKept) {
+  TempDir dir;
+  const std::string path = dir.write("model.json", "old\n");
+  fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  fs::permissions(dir.path(), fs::perms::all);  // the folder is writable by the child
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) ::_exit(3);
+    try {
+      write_file_atomically(path, "new\n");
+      ::_exit(1);
+    } catch (const Error& error) {
+      ::_exit(std::string(error.what()).find("the file is read-only") != std::string::npos ? 0 : 2);
+    } catch (...) {
+      ::_exit(4);
+    }
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "1: replaced, 2: another error, 3: could not drop to nobody";
+  EXPECT_EQ(read_file(path), "old\n");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"model.json"});
+}
+
 TEST(AtomicFile, WritesIntoANullDeviceAndLeavesItADevice) {
   TempDir dir;
   const std::string device = dir.file("null");
