@@ -105,6 +105,23 @@ void refuse_repeated_name(const CsvReader& reader, std::size_t index, const char
   }
 }
 
+// Columns chosen by index may share a header name. The model stores its axes and
+// temperature inputs by those names and the compensated columns carry them, so two of
+// one name would be one axis written twice, or a log the model could not read again.
+void refuse_shared_names(const CsvReader& reader, const std::vector<std::size_t>& chosen, const char* role) {
+  if (!reader.has_header()) return;
+  for (std::size_t a = 0; a < chosen.size(); ++a) {
+    for (std::size_t b = a + 1; b < chosen.size(); ++b) {
+      const auto [first, second] = std::minmax(chosen[a], chosen[b]);
+      if (first == second || reader.header()[first] != reader.header()[second]) continue;
+      throw DataError(reader.path(), reader.header_line(), second + 1,
+                      fmt::format("{} columns {} and {} are both named '{}': the model keeps its inputs by "
+                                  "name; rename one",
+                                  role, first + 1, second + 1, excerpt(reader.header()[first])));
+    }
+  }
+}
+
 std::size_t find_column(const std::string& name, const CsvReader& reader, const char* role) {
   for (std::size_t i = 0; i < reader.header().size(); ++i) {
     if (reader.header()[i] == name) {
@@ -221,6 +238,8 @@ LogColumns resolve_columns(const LogSpec& spec, const CsvReader& reader) {
     }
   }
   spec.scaling.check(columns.gyro.size(), columns.temperature.size());
+  refuse_shared_names(reader, columns.gyro, "gyro");
+  refuse_shared_names(reader, columns.temperature, "temperature");
   for (auto index : columns.gyro) columns.gyro_names.push_back(column_label(reader, index));
   for (auto index : columns.temperature) {
     columns.temperature_names.push_back(column_label(reader, index));

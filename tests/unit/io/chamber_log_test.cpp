@@ -353,6 +353,17 @@ TEST(ChamberLogErrors, AColumnNamedTwiceInTheHeader) {
   LogSpec by_index = named_spec();
   by_index.gyro_columns = {"4", "5"};
   EXPECT_EQ(read_chamber_log(path, by_index).axes(), 2u);
+  // Two axes chosen by index under one name: the model and the compensated columns know
+  // the axes by name, so they would be one axis twice.
+  by_index.gyro_columns = {"3", "4"};
+  error = log_error(path, by_index);
+  EXPECT_EQ(error.line(), 2u);
+  EXPECT_EQ(error.column(), 4u);
+  EXPECT_TRUE(contains(error.message(), "gyro columns 3 and 4 are both named 'gyro_x'")) << error.what();
+  LogSpec temperatures = named_spec();
+  temperatures.temperature_columns = {"2", "4"};
+  const auto two_temps = dir.write("temps.csv", "time_s,temp,gyro_x,temp\n0,20,1,21\n1,20,1,21\n");
+  EXPECT_TRUE(contains(log_error(two_temps, temperatures).message(), "temperature columns 2 and 4 are both named 'temp'"));
   const auto unused = dir.write("unused.csv", "time_s,temp,gyro_x,note,note\n0,20,1,5,6\n1,20,1,5,6\n");
   EXPECT_EQ(read_chamber_log(unused, detected).axes(), 1u);
 }
