@@ -13,6 +13,7 @@
 #include "thermodrift/error.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/io/json_integer.hpp"
+#include "thermodrift/io/json_position.hpp"
 
 namespace thermodrift {
 
@@ -68,27 +69,40 @@ bool nested_deeper_than(const nlohmann::json& json, std::size_t levels) {
                      [&](const nlohmann::json& value) { return nested_deeper_than(value, levels - 1); });
 }
 
+// A number a model cannot apply: what is wrong, and where (a JSON pointer below the value
+// searched).
+struct BadNumber {
+  std::string message;
+  std::string pointer;
+};
+
 // The first null (JSON's stand-in for NaN and inf) or number beyond the limit in `json`
 // but its member `skip`, named by its path ("model.coefficients[1]"); nothing if none.
-std::optional<std::string> find_bad_number(const nlohmann::json& json, const std::string& path,
-                                           std::string_view skip = {}) {
+std::optional<BadNumber> find_bad_number(const nlohmann::json& json, const std::string& path,
+                                         std::string_view skip = {}, const std::string& pointer = {}) {
   const std::string& name = path.empty() ? std::string("the file") : path;
-  if (json.is_null()) return fmt::format("{} is null, not a finite number", name);
+  if (json.is_null()) return BadNumber{fmt::format("{} is null, not a finite number", name), pointer};
   if (json.is_number()) {
     const double value = json.get<double>();
-    if (!std::isfinite(value)) return fmt::format("{} is not a finite number", name);
+    if (!std::isfinite(value)) return BadNumber{fmt::format("{} is not a finite number", name), pointer};
     if (std::abs(value) > kModelNumberLimit) {
-      return fmt::format("{} is {:.6g}, beyond the ±{:g} a model's numbers stay within", name, value,
-                         kModelNumberLimit);
+      return BadNumber{fmt::format("{} is {:.6g}, beyond the ±{:g} a model's numbers stay within", name, value,
+                                   kModelNumberLimit),
+                       pointer};
     }
   } else if (json.is_array()) {
     for (std::size_t i = 0; i < json.size(); ++i) {
-      if (auto bad = find_bad_number(json[i], fmt::format("{}[{}]", path, i))) return bad;
+      if (auto bad = find_bad_number(json[i], fmt::format("{}[{}]", path, i), {}, fmt::format("{}/{}", pointer, i))) {
+        return bad;
+      }
     }
   } else if (json.is_object()) {
     for (const auto& [key, value] : json.items()) {
       if (path.empty() && key == skip) continue;
-      if (auto bad = find_bad_number(value, path.empty() ? key : fmt::format("{}.{}", path, key))) return bad;
+      if (auto bad = find_bad_number(value, path.empty() ? key : fmt::format("{}.{}", path, key), {},
+                                     json_pointer_child(pointer, key))) {
+        return bad;
+      }
     }
   }
   return std::nullopt;
@@ -104,11 +118,16 @@ std::string without_json_tag(const std::exception& e) {
   return what;
 }
 
-// Why reading `json` failed with `e`: a number expected but null found is named by its
-// path rather than by nlohmann's "type must be number, but is null".
-std::string why_unreadable(const std::exception& e, const nlohmann::json& json, std::string_view skip) {
+// Why reading `json` (at `pointer`) failed with `e`: a number expected but null found is
+// named by its path rather than by nlohmann's "type must be number, but is null", and
+// `pointer` moves to it.
+std::string why_unreadable(const std::exception& e, const nlohmann::json& json, std::string_view skip,
+                           std::string& pointer) {
   if (dynamic_cast<const nlohmann::json::type_error*>(&e) != nullptr) {
-    if (auto bad = find_bad_number(json, "", skip)) return *bad;
+    if (auto bad = find_bad_number(json, "", skip, pointer)) {
+      pointer = bad->pointer;
+      return bad->message;
+    }
   }
   return without_json_tag(e);
 }
@@ -199,25 +218,37 @@ nlohmann::json to_json(const DriftModel& model) {
   return json;
 }
 
-DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& source) {
-  auto fail = [&](const std::string& what) { return DataError(source, 0, 0, what); };
+DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& source,
+                                 const JsonPositions* positions) {
+  // The value being read, as a JSON pointer: a refusal names its line and column.
+  std::string where;
+  auto fail = [&](const std::string& what) {
+    const TextPosition at = positions != nullptr ? positions->of(where) : TextPosition{0, 0};
+    return DataError(source, at.first, at.second, what);
+  };
   // Before anything walks it: a JSON value handed in through the API was never scanned.
   if (nested_deeper_than(json, kMaxNesting)) {
     throw fail(fmt::format("arrays or objects nested more than {} deep: not a model file", kMaxNesting));
   }
   try {
     if (!json.is_object() || json.value("format", "") != kFormatName) {
+      if (json.is_object() && json.contains("format")) where = "/format";
       throw fail("not a thermodrift model file (no \"format\": \"thermodrift-model\")");
     }
+    where = "/version";
     const int version = json_integer<int>(json.at("version"), "version");
     if (version != DriftModel::kFormatVersion) {
       throw fail(fmt::format("model file version {} is not supported (this build reads version {})",
                              version, DriftModel::kFormatVersion));
     }
     DriftModel model;
+    where = "/gyro_unit";
     model.gyro_unit = parse_gyro_unit(json.at("gyro_unit").get<std::string>());
+    where = "/time_column";
     if (json.contains("time_column")) model.time_column = json.at("time_column").get<std::string>();
+    where = "/time_unit";
     if (json.contains("time_unit")) model.time_unit = parse_time_unit(json.at("time_unit").get<std::string>());
+    where = "/rate_hz";
     if (json.contains("rate_hz")) {
       model.rate_hz = json.at("rate_hz").get<double>();
       // A row's time is its number over the rate: a subnormal rate made it infinite. (A
@@ -227,6 +258,7 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
                                1 / kModelNumberLimit));
       }
     }
+    where = "/despike";
     if (json.contains("despike")) {
       const auto& despike = json.at("despike");
       if (!despike.is_object() || !despike.contains("window") || !despike.contains("sigmas")) {
@@ -256,10 +288,13 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
         model.despiked_temperature = counts("temperature");
       }
     }
+    where = "/extra_temperature_columns";
     if (json.contains("extra_temperature_columns")) {
       model.extra_temperature_columns = json.at("extra_temperature_columns").get<std::vector<std::string>>();
     }
+    where = "/axes";
     if (!json.at("axes").is_array() || json.at("axes").empty()) throw fail("model file has no axes");
+    where = "/scaling";
     if (json.contains("scaling")) {
       const auto& scaling = json.at("scaling");
       model.scaling.temperature_scale = scaling.value("temperature_scale", std::vector<double>{});
@@ -273,31 +308,39 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
     }
     std::size_t index = 0;
     for (const auto& entry : json.at("axes")) {
+      const std::string axis_at = fmt::format("/axes/{}", index);
+      // Each part read below moves `where` into it; its own checks name the part.
+      auto at = [&](const char* member) -> const nlohmann::json& {
+        where = json_pointer_child(axis_at, member);
+        return entry.at(member);
+      };
       try {
+        where = axis_at;
         AxisModel axis;
-        axis.name = entry.at("name").get<std::string>();
-        axis.gyro_column = entry.at("gyro_column").get<std::string>();
-        axis.temperature_column = entry.at("temperature_column").get<std::string>();
-        axis.pipeline = Pipeline::from_json(entry.at("pipeline"));
-        const auto kind_name = entry.at("kind").get<std::string>();
+        axis.name = at("name").get<std::string>();
+        axis.gyro_column = at("gyro_column").get<std::string>();
+        axis.temperature_column = at("temperature_column").get<std::string>();
+        axis.pipeline = Pipeline::from_json(at("pipeline"));
+        const auto kind_name = at("kind").get<std::string>();
         const auto kind = model_kind_named(kind_name);
         if (!kind) throw Error(fmt::format("unknown model kind '{}'", excerpt(kind_name)));
         axis.kind = *kind;
         const auto terms = axis.pipeline.term_names();
         if (is_least_squares(axis.kind)) {
-          auto linear = LinearModel::from_json(entry.at("model"), terms);
+          auto linear = LinearModel::from_json(at("model"), terms);
           if (!std::isfinite(linear.intercept) || !linear.coefficients.allFinite()) {
             throw Error("non-finite coefficient");
           }
           axis.model = std::move(linear);
         } else {
-          axis.model = SvrModel::from_json(entry.at("model"), terms);
+          axis.model = SvrModel::from_json(at("model"), terms);
         }
-        if (entry.contains("fit")) axis.fit = fit_record_from_json(entry.at("fit"));
+        if (entry.contains("fit")) axis.fit = fit_record_from_json(at("fit"));
         if (entry.contains("training_envelope")) {
           if (axis.pipeline.libsvm) throw Error("a libsvm-format model has no training envelope");
-          axis.envelope = TrainingEnvelope::from_json(entry.at("training_envelope"), terms.size());
+          axis.envelope = TrainingEnvelope::from_json(at("training_envelope"), terms.size());
         }
+        where = json_pointer_child(axis_at, "pipeline");
         const std::size_t inputs = json.at("axes").size() + model.extra_temperature_columns.size();
         for (const std::size_t channel : axis.pipeline.channels()) {
           if (channel >= inputs) {
@@ -310,21 +353,34 @@ DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& 
                                   axis.pipeline.temperature_input(0) + 1, inputs));
         }
         // Whatever the checks above did not read: the fit record is informational.
-        if (auto bad = find_bad_number(entry, "", "fit")) throw Error(*bad);
+        if (auto bad = find_bad_number(entry, "", "fit", axis_at)) {
+          where = bad->pointer;
+          throw Error(bad->message);
+        }
         model.axes.push_back(std::move(axis));
       } catch (const DataError&) {
         throw;
       } catch (const std::exception& e) {
-        throw fail(fmt::format("axis {}: {}", index + 1, why_unreadable(e, entry, "fit")));
+        // Named at the part whose reading failed, or at a null or absurd number in the axis.
+        std::string bad_at = axis_at;
+        const std::string why = why_unreadable(e, entry, "fit", bad_at);
+        if (bad_at != axis_at) where = bad_at;
+        throw fail(fmt::format("axis {}: {}", index + 1, why));
       }
       ++index;
     }
-    if (auto bad = find_bad_number(json, "", "axes")) throw Error(*bad);
+    if (auto bad = find_bad_number(json, "", "axes")) {
+      where = bad->pointer;
+      throw Error(bad->message);
+    }
     return model;
   } catch (const DataError&) {
     throw;
   } catch (const std::exception& e) {
-    throw fail(fmt::format("invalid model file: {}", why_unreadable(e, json, "axes")));
+    std::string bad_at;
+    const std::string why = why_unreadable(e, json, "axes", bad_at);
+    if (!bad_at.empty()) where = bad_at;
+    throw fail(fmt::format("invalid model file: {}", why));
   }
 }
 
@@ -378,7 +434,8 @@ DriftModel load_drift_model(const std::string& path) {
     // must still be bad data naming the file, not an internal failure.
     throw DataError(path, 0, 0, fmt::format("model file is not valid JSON: {}", without_json_tag(e)));
   }
-  return drift_model_from_json(json, path);
+  const JsonPositions positions(text);
+  return drift_model_from_json(json, path, &positions);
 }
 
 }  // namespace thermodrift

@@ -2,6 +2,7 @@
 // column twice, a number list or a whole number that is not one, a decimation that leaves
 // too few samples, a CR-only or UTF-16 file, and
 // nlohmann's exception tags in model-file errors.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -133,11 +134,19 @@ TEST_F(ClearMessages, ModelFileErrorsCarryNoJsonExceptionTags) {
   const auto at = text.find("\"gyro_unit\": \"dph\"");
   ASSERT_NE(at, std::string::npos);
   dir_.write("unit.json", std::string(text).replace(at, 18, "\"gyro_unit\": 5"));
-  expect_refused("evaluate --model unit.json --data log.csv", 3, "unit.json: invalid model file: type must be string, but is number");
+  // Named at the value refused (the replacements keep every line and column before them).
+  auto position = [&](std::size_t offset) {
+    const auto line_start = text.rfind('\n', offset);
+    return fmt::format("{}:{}", 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'),
+                       offset - line_start);
+  };
+  expect_refused("evaluate --model unit.json --data log.csv", 3,
+                 "unit.json:" + position(at + 13) + ": invalid model file: type must be string, but is number");
   const auto name = text.find("\"name\": \"gyro_x\"");
   ASSERT_NE(name, std::string::npos);
   dir_.write("name.json", std::string(text).replace(name, 16, "\"name\": []"));
-  expect_refused("evaluate --model name.json --data log.csv", 3, "name.json: axis 1: type must be string, but is array");
+  expect_refused("evaluate --model name.json --data log.csv", 3,
+                 "name.json:" + position(name + 8) + ": axis 1: type must be string, but is array");
 }
 
 }  // namespace

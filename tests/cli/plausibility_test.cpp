@@ -68,6 +68,7 @@ void expect_refused_at_load(const TempDir& dir, const std::string& model, const 
     const auto result = run_thermodrift(dir, command);
     EXPECT_EQ(result.status, 3) << result.err;
     EXPECT_TRUE(contains(result.err, message)) << result.err;
+    EXPECT_TRUE(contains(result.err, model + ":")) << result.err;  // then the value's line and column
     EXPECT_EQ(split_lines(result.err).size(), 1u) << result.err;
   }
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.csv")));
@@ -94,7 +95,7 @@ std::string with_number_after(std::string text, const std::string& key, const st
 TEST(Plausibility, AModelWithAbsurdNumbersIsRefusedAtLoad) {
   TempDir dir;
   dir.write("huge.json", with_number_after(fitted_model_text(dir, "linear"), "\"intercept\": ", "1e308"));
-  expect_refused_at_load(dir, "huge.json", "huge.json: axis 1: model.intercept is 1e+308, beyond");
+  expect_refused_at_load(dir, "huge.json", ": axis 1: model.intercept is 1e+308, beyond");
   // Within ±1e12 but no temperature: a reference of 1e11 °C made compensate write 1.6e12 °/h.
   dir.write("hot.json", with_number_after(read_file(dir.file("m.json")), "\"reference_temperature\": ", "1e11"));
   const auto result = run_thermodrift(dir, "compensate --model hot.json --data log.csv --out c.csv");
@@ -134,7 +135,7 @@ TEST(Plausibility, ASubnormalScaleIsRefusedAtLoad) {
   dir.write("tiny.json",
             with_number_after(fitted_model_text(dir, "svr --C 10 --sigma 1"), "\"feature_scale\": [", "5e-324"));
   expect_refused_at_load(dir, "tiny.json",
-                         "tiny.json: axis 1: model.feature_scale[0] is 4.94066e-324: a scale must be at least 1e-12");
+                         ": axis 1: model.feature_scale[0] is 4.94066e-324: a scale must be at least 1e-12");
 }
 
 // A model whose prediction overflows on a log inside the physical ranges (here a term
@@ -197,7 +198,7 @@ TEST(Plausibility, TooManyTermsPerAxisAreRefusedByFitAndAtLoad) {
   dir.write("many.json", text);
   const auto evaluate = run_thermodrift(dir, "evaluate --model many.json --data log.csv");
   EXPECT_EQ(evaluate.status, 3) << evaluate.err;
-  EXPECT_TRUE(contains(evaluate.err, "many.json: axis 1: 257 feature terms for one axis; at most 256 are allowed"))
+  EXPECT_TRUE(contains(evaluate.err, ": axis 1: 257 feature terms for one axis; at most 256 are allowed"))
       << evaluate.err;
 }
 

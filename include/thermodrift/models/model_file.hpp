@@ -66,8 +66,11 @@ struct DriftModel {
 };
 
 nlohmann::json to_json(const DriftModel& model);
-// Throws DataError(source, ...) on anything that does not fit.
-DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& source);
+class JsonPositions;
+// Throws DataError(source, ...) on anything that does not fit; with the positions of the
+// text `json` was parsed from, at the line and column of the value refused.
+DriftModel drift_model_from_json(const nlohmann::json& json, const std::string& source,
+                                 const JsonPositions* positions = nullptr);
 
 void save_drift_model(const DriftModel& model, const std::string& path,
                       const std::vector<std::string>& inputs = {});

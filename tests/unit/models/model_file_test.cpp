@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -55,6 +56,22 @@ DataError load_error(const std::string& path) {
   }
   ADD_FAILURE() << "no DataError loading " << path;
   return DataError("", 0, 0, "");
+}
+
+// The 1-based line and column of the `occurrence`-th `needle` in `text` (0: the first),
+// plus `offset` characters.
+std::pair<std::size_t, std::size_t> position_in(const std::string& text, const std::string& needle,
+                                                std::size_t offset = 0, int occurrence = 0) {
+  std::size_t at = text.find(needle);
+  for (int i = 0; i < occurrence && at != std::string::npos; ++i) at = text.find(needle, at + 1);
+  if (at == std::string::npos) {
+    ADD_FAILURE() << "no " << needle;
+    return {0, 0};
+  }
+  at += offset;
+  const auto line_start = text.rfind('\n', at);
+  const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+  return {line, line_start == std::string::npos ? at + 1 : at - line_start};
 }
 
 // The saved JSON of the two-axis model, for editing.
@@ -273,8 +290,7 @@ TEST(ModelFileErrors, AnotherVersion) {
   const auto path = dir.write("v2.json", json.dump(1));
   const auto error = load_error(path);
   EXPECT_EQ(error.file(), path);
-  EXPECT_EQ(error.line(), 0u);
-  EXPECT_EQ(error.column(), 0u);
+  EXPECT_EQ(std::pair(error.line(), error.column()), position_in(json.dump(1), "\"version\": 2", 11));
   EXPECT_TRUE(contains(error.message(), "model file version 2 is not supported (this build reads version 1)"))
       << error.what();
 }
@@ -443,13 +459,27 @@ TEST(ModelFileErrors, ScalesAndRatesTooSmallToDivideBy) {
       << error.what();
 }
 
+// A file refused for what a value means is named at the part that holds it: the axis'
+// model, its pipeline, the number itself.
 TEST(ModelFileErrors, WrongNumberOfCoefficients) {
   TempDir dir;
   auto json = saved_json(dir);
   json["axes"][0]["model"]["coefficients"].push_back(1.0);
-  const auto error = load_error(dir.write("coef.json", json.dump()));
-  EXPECT_EQ(error.line(), 0u);
+  const std::string text = json.dump(1);
+  const auto error = load_error(dir.write("coef.json", text));
+  EXPECT_EQ(std::pair(error.line(), error.column()), position_in(text, "\"model\": {", 9));
   EXPECT_TRUE(contains(error.message(), "axis 1: 3 coefficients for 2 regressors")) << error.what();
+  // The second axis' pipeline: the same key further down.
+  json = saved_json(dir);
+  json["axes"][1]["pipeline"]["smooth_seconds"] = -3;
+  const std::string second = json.dump(1);
+  const auto pipeline = load_error(dir.write("smooth.json", second));
+  EXPECT_EQ(std::pair(pipeline.line(), pipeline.column()), position_in(second, "\"pipeline\": {", 12, 1));
+  EXPECT_TRUE(contains(pipeline.message(), "axis 2: smoothing window must be >= 0 s")) << pipeline.what();
+  // On one line, the column tells them apart.
+  const auto compact = load_error(dir.write("compact.json", json.dump()));
+  EXPECT_EQ(compact.line(), 1u);
+  EXPECT_EQ(compact.column(), position_in(json.dump(), "\"pipeline\":{", 11, 1).second);
 }
 
 TEST(ModelFileErrors, RegressorOfAnUnknownTerm) {
@@ -505,14 +535,15 @@ TEST(ModelFileErrors, AbsurdNumbersDuplicateKeysAndDisagreeingSigma) {
   TempDir dir;
   auto json = saved_json(dir);
   json["axes"][0]["model"]["coefficients"][0] = 1e308;
-  auto error = load_error(dir.write("huge.json", json.dump()));
-  EXPECT_EQ(error.line(), 0u);
+  auto error = load_error(dir.write("huge.json", json.dump(1)));
+  EXPECT_EQ(std::pair(error.line(), error.column()), position_in(json.dump(1), "1e+308"));
   EXPECT_TRUE(contains(error.message(), "axis 1: model.coefficients[0] is 1e+308, beyond the ±1e+12")) << error.what();
   json = saved_json(dir);
   json["axes"][1]["pipeline"]["reference_temperature"] = nullptr;
   error = load_error(dir.write("null.json", json.dump()));
   EXPECT_TRUE(contains(error.message(), "axis 2: pipeline.reference_temperature is null, not a finite number"))
       << error.what();
+  EXPECT_EQ(error.column(), position_in(json.dump(), "null").second);
   json = saved_json(dir);
   json["rate_hz"] = -3e15;
   EXPECT_TRUE(contains(load_error(dir.write("rate.json", json.dump())).message(), "rate_hz is -3e+15, beyond"));
