@@ -149,7 +149,13 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
   const Calibration& calibration = run.calibration;
   const std::vector<ChamberLog>& logs = run.logs;
   save_drift_model(calibration.model, out);
-  for (const auto& warning : fit_run_warnings(calibration)) warn(warning);
+  // Printed on stderr as they come, and listed in --json for a script that reads only stdout.
+  nlohmann::json warnings = nlohmann::json::array();
+  auto warn_and_keep = [&](const std::string& warning) {
+    warn(warning);
+    warnings.push_back(warning);
+  };
+  for (const auto& warning : fit_run_warnings(calibration)) warn_and_keep(warning);
 
   nlohmann::json result = {{"command", "fit"}, {"model_file", args.out}, {"evaluation", "in-sample"}};
   nlohmann::json axes = nlohmann::json::array();
@@ -179,7 +185,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
     }
     add_expected_held_out(entry, axis.fit);
-    if (const auto warning = far_from_floor_warning(entry)) warn(*warning);
+    if (const auto warning = far_from_floor_warning(entry)) warn_and_keep(*warning);
     if (const auto& compressed = axis.fit.compressed) {
       entry["compressed"] = to_json(*compressed);
       if (!args.json) {
@@ -190,6 +196,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
     axes.push_back(entry);
   }
   result["axes"] = axes;
+  result["warnings"] = warnings;
   if (!logs.empty()) {  // how many samples each step used (the first axis; the others alike)
     std::size_t rows = 0, samples = 0, bursts = 0;
     for (const auto& log : logs) {

@@ -204,6 +204,14 @@ TEST_F(Envelope, FitWarnsWhenTheModelIsFarFromTheFloor) {
   const double held_out = parse(tuned)["axes"][0]["expected_held_out"]["x_floor_estimate"].get<double>();
   ASSERT_GT(held_out, 2.0);
   EXPECT_TRUE(contains(tuned.err, "gyro_x: its expected held-out MSE is ")) << tuned.err;
+  // --json lists the warnings stderr gave, for a script that reads stdout only.
+  const auto warnings = parse(tuned).at("warnings");
+  ASSERT_TRUE(warnings.is_array());
+  ASSERT_FALSE(warnings.empty());
+  for (const auto& warning : warnings) {
+    EXPECT_TRUE(contains(tuned.err, "thermodrift: warning: " + warning.get<std::string>())) << warning;
+  }
+  EXPECT_TRUE(contains(warnings.back().get<std::string>(), "gyro_x: its expected held-out MSE is ")) << warnings;
 }
 
 // A drift the model holds exactly (linear in the temperature, white noise): no warning.
@@ -223,6 +231,7 @@ TEST(FarFromTheFloor, FitIsQuietWhenTheModelReachesTheFloor) {
   const double ratio = parse(fit)["axes"][0].at("mse_after_x_floor").get<double>();
   EXPECT_LT(ratio, 1.5);
   EXPECT_FALSE(contains(fit.err, "noise floor estimate")) << fit.err;
+  EXPECT_EQ(parse(fit).at("warnings"), nlohmann::json::array());
 }
 
 }  // namespace
