@@ -10,7 +10,7 @@
 //                                  [--oracle-without NAME,...] [--oracle-target gyro|drift]
 //                                  [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
-//                                  [--cv-score geometric|pooled] [--min-gain X] [--training-noise K]
+//                                  [--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K]
 //                                  [--bag B] [--training-quiet bias|gyro|all]
 //                                  [--log-start power-on|running|estimated] [--json FILE]
 //
@@ -122,6 +122,7 @@ struct Arguments {
   bool node_under_dynamics = FeatureSelectionOptions{}.node_under_dynamics;  // --node-under-dynamics on|off
   FeatureSelectionOptions::CvScore cv_score = FeatureSelectionOptions{}.cv_score;  // --cv-score geometric|pooled
   double min_gain = FeatureSelectionOptions{}.min_gain;  // --min-gain: the searches' penalty per term (the kernel check takes it too)
+  int search_folds = FeatureSelectionOptions{}.folds;  // --search-folds N: the searches' blocked CV
   std::uint64_t training_noise = 0;  // --training-noise K: 0 the training run's own noise, K > 0 another draw
   std::size_t bag = 1;  // --bag B: B models on B noise draws of the training cycle, their predictions averaged
   // --training-quiet bias|gyro|all (a diagnostic): the training cycle simulated again without
@@ -154,7 +155,7 @@ Arguments parse(int argc, char** argv) {
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
                  "[--oracle-target gyro|drift] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
-                 "[--cv-score geometric|pooled] [--min-gain X] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--log-start power-on|running|estimated] [--json FILE]\n",
+                 "[--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--log-start power-on|running|estimated] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
     }
@@ -172,6 +173,7 @@ Arguments parse(int argc, char** argv) {
       args.training_quiet = value;
     }
     else if (flag == "--log-start") args.log_start = parse_log_start(value);
+    else if (flag == "--search-folds") args.search_folds = std::max(2, std::stoi(value));
     else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
     else if (flag == "--cv-score" && (value == "geometric" || value == "pooled")) {
@@ -558,6 +560,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       options.selection.node_under_dynamics = args.node_under_dynamics;
       options.selection.cv_score = args.cv_score;
       options.selection.min_gain = args.min_gain;
+      options.selection.folds = args.search_folds;
       options.folds_by = args.folds_by;
       if (args.rate_span && method != Method::paper) options.rate_span_seconds = args.rate_span;
       if (chooses_features(options)) {
@@ -606,20 +609,35 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       }
       for (const auto& test : tests) {
         std::vector<ResidualMetrics> metrics;
+        // The judged rows as evaluate predicts them (from the log start it was asked for);
+        // the carried test's lags run through cycle 1 instead.
+        auto evaluated = [&](const DriftModel& model) {
+          return test.carried_from_row ? std::vector<AxisEvaluation>{}
+                                       : evaluate_axes(model, {test.log}, settle_s, {}, args.log_start);
+        };
+        auto judged_rows = [&](const DriftModel& model, const std::vector<AxisEvaluation>& evaluations, std::size_t a) {
+          JudgedRows rows = judge_axis(model, test, a);
+          if (test.carried_from_row) return rows;
+          if (evaluations.at(a).rows != rows.row) throw std::runtime_error("evaluate judged other rows than the bench");
+          rows.predicted = Eigen::Map<const Eigen::VectorXd>(evaluations[a].predicted.data(),
+                                                             static_cast<Eigen::Index>(evaluations[a].predicted.size()));
+          return rows;
+        };
+        const std::vector<AxisEvaluation> evaluations = evaluated(calibration.model);
+        std::vector<std::vector<AxisEvaluation>> bagged_evaluations;
+        for (const auto& model : bagged) bagged_evaluations.push_back(evaluated(model));
         if (test.carried_from_row) {
           metrics = evaluate_from(calibration.model, test.log, *test.carried_from_row);
         } else {
-          for (const auto& axis : evaluate_axes(calibration.model, {test.log}, settle_s, {}, args.log_start)) {
-            metrics.push_back(axis.metrics);
-          }
+          for (const auto& axis : evaluations) metrics.push_back(axis.metrics);
         }
         TestResult judged;
         for (std::size_t a = 0; a < 3; ++a) {
           // The judged rows' prediction, averaged over the bagged models (--bag): its MSE
           // against the gyro replaces evaluate's, its distance from the true drift is kept.
-          JudgedRows mean = judge_axis(calibration.model, test, a);
-          for (const auto& model : bagged) {
-            const JudgedRows other = judge_axis(model, test, a);
+          JudgedRows mean = judged_rows(calibration.model, evaluations, a);
+          for (std::size_t b = 0; b < bagged.size(); ++b) {
+            const JudgedRows other = judged_rows(bagged[b], bagged_evaluations[b], a);
             if (other.row != mean.row) throw std::runtime_error("bagged models judge different rows");
             mean.predicted += other.predicted;
           }

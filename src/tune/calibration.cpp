@@ -905,6 +905,8 @@ std::vector<AxisEvaluation> evaluate_axes(const DriftModel& model, const std::ve
     }
     evaluation.metrics =
         residual_metrics(table.target, Eigen::Map<const Eigen::VectorXd>(predicted.data(), static_cast<Eigen::Index>(predicted.size())));
+    evaluation.rows = table.row;
+    evaluation.predicted = std::move(predicted);
     if (axis_model.envelope) evaluation.outside_envelope = tally_outside(*axis_model.envelope, table);
     evaluations.push_back(std::move(evaluation));
   }

@@ -199,6 +199,10 @@ struct AxisEvaluation {
   // LogStart::estimated: per log, the weight of the running start (0: power-on, 1: running)
   // its settling rows chose.
   std::vector<double> running_weight;
+  // The judged rows (each log's own row numbers, log after log) and their prediction, as
+  // the metrics saw them.
+  std::vector<std::size_t> rows;
+  std::vector<double> predicted;
 };
 // Where a log starts (evaluate --log-start). `power_on`: the lags start in equilibrium at its
 // first row, as a unit switched on there is. `running`: the log is cut from a longer
