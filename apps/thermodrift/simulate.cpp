@@ -51,8 +51,10 @@ int run_simulate(const SimulateArguments& args) {
   std::string why;
   if (!args.options.IsValid(&why)) throw UsageError(why);
   const StopToken stop = interrupt_token();
-  const sim::ChamberRun run = args.law ? simulate_law(args, stop) : sim::simulate(args.options, stop);
+  // Opened first, as fit and compensate do: an output that cannot be written is refused
+  // before the simulation, and a FIFO's reader gets an end of file if it stops.
   AtomicFile out(args.out);
+  const sim::ChamberRun run = args.law ? simulate_law(args, stop) : sim::simulate(args.options, stop);
   sim::write_csv(run, out.stream(), stop);
   out.commit();
   fmt::print(stderr, "thermodrift: wrote {} rows ({:.1f} h, {} cycle{}) to {}\n", run.rows(),
