@@ -15,6 +15,7 @@
 #include "numbers.hpp"
 #include "output.hpp"
 #include "thermodrift/error.hpp"
+#include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/tune/calibration.hpp"
 
 namespace thermodrift::cli {
@@ -31,6 +32,10 @@ struct CompressArguments {
 };
 
 int run_compress(const CompressArguments& args) {
+  std::vector<std::string> inputs{args.model_file};
+  inputs.insert(inputs.end(), args.data.files.begin(), args.data.files.end());
+  // Opened first, as fit does: an output that cannot be written is refused before the work.
+  AtomicFile out(args.out, inputs);
   const DriftModel original = load_drift_model(args.model_file);
   DriftModel compressed = original;
   ReduceOptions reduce;
@@ -75,9 +80,7 @@ int run_compress(const CompressArguments& args) {
       record->settle_seconds = args.settle;
     }
   }
-  std::vector<std::string> inputs{args.model_file};
-  inputs.insert(inputs.end(), args.data.files.begin(), args.data.files.end());
-  save_drift_model(compressed, args.out, inputs);
+  save_drift_model(compressed, out);
 
   nlohmann::json axes = nlohmann::json::array();
   for (const auto& axis : compressed.axes) {
