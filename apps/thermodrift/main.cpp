@@ -8,6 +8,9 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <vector>
+
+#include <unistd.h>
 
 #include "commands.hpp"
 #include "exit_status.hpp"
@@ -36,6 +39,11 @@ int main(int argc, char** argv) {
   // A reader that goes away (`| head`, a FIFO closed early) must make a write fail with
   // EPIPE, reported as one line and exit 1, not kill the process without a word.
   std::signal(SIGPIPE, SIG_IGN);
+  // Into a file or a pipe, what a command prints reaches it at the end, in one flush, so
+  // that a failed write is seen with its errno below ("No space left on device"); a write
+  // that failed mid-way inside stdio left only its error flag. A terminal stays line-buffered.
+  static std::vector<char> stdout_buffer(std::size_t{1} << 20);
+  if (::isatty(STDOUT_FILENO) == 0) std::setvbuf(stdout, stdout_buffer.data(), _IOFBF, stdout_buffer.size());
   try {
     const int status = thermodrift::cli::run_selected(commands);
     // What a command printed on stdout (evaluate's table, fit --json, export's summary)
