@@ -11,7 +11,7 @@
 //                                  [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
 //                                  [--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K]
-//                                  [--bag B] [--training-quiet bias|gyro|all]
+//                                  [--bag B] [--training-quiet bias|gyro|all] [--chamber-air NOISE:RESOLUTION]
 //                                  [--log-start power-on|running|estimated] [--json FILE]
 //
 // Per law seed s: the unit sim::draw_unit(s) runs a two-cycle `cycle` programme; cycle 1
@@ -129,6 +129,10 @@ struct Arguments {
   // the bias instability, without the gyro's noise, or without any noise (the thermometers'
   // too); the tests keep theirs: what the noise costs.
   std::string training_quiet;
+  // --chamber-air NOISE:RESOLUTION: the chamber's air temperature as a fourth thermometer,
+  // as a chamber log has it (white noise of NOISE °C, quantized to RESOLUTION °C): a channel
+  // upstream of every node, for the node search and the measured gradients.
+  std::optional<std::pair<double, double>> chamber_air;
   // --log-start: where evaluate starts each test log but the carried one (evaluate's default)
   LogStart log_start = LogStart::estimated;
 };
@@ -155,7 +159,7 @@ Arguments parse(int argc, char** argv) {
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
                  "[--oracle-target gyro|drift] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
-                 "[--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--log-start power-on|running|estimated] [--json FILE]\n",
+                 "[--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--chamber-air NOISE:RESOLUTION] [--log-start power-on|running|estimated] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
     }
@@ -173,6 +177,11 @@ Arguments parse(int argc, char** argv) {
       args.training_quiet = value;
     }
     else if (flag == "--log-start") args.log_start = parse_log_start(value);
+    else if (flag == "--chamber-air") {
+      const auto colon = value.find(':');
+      if (colon == std::string::npos) throw std::invalid_argument("--chamber-air NOISE:RESOLUTION");
+      args.chamber_air = std::pair{std::stod(value.substr(0, colon)), std::stod(value.substr(colon + 1))};
+    }
     else if (flag == "--search-folds") args.search_folds = std::max(2, std::stoi(value));
     else if (flag == "--bag") args.bag = std::max<std::size_t>(1, std::stoul(value));
     else if (flag == "--node-under-dynamics" && (value == "on" || value == "off")) args.node_under_dynamics = value == "on";
@@ -243,9 +252,41 @@ struct TestLog {
   std::optional<std::size_t> carried_from_row;
 };
 
+constexpr const char* kMeasuredAir = "temp_chamber_measured";
+
+// The unit through a programme; with --chamber-air, the run also holds the chamber air as
+// its sensor reads it (its noise drawn from the run's own noise seed).
+sim::ChamberRun simulate(const sim::UnitLaw& unit, const sim::Setpoint& programme, std::uint64_t noise_seed,
+                         const std::optional<std::pair<double, double>>& chamber_air) {
+  sim::ChamberRun run = sim::simulate_unit(unit, programme, noise_seed);
+  if (chamber_air) {
+    sim::StandardNormal normal(sim::derive_seed(noise_seed, 0xa1));
+    std::vector<double> measured = run.column("temp_chamber");
+    for (double& value : measured) {
+      value += chamber_air->first * normal();
+      if (chamber_air->second > 0) value = chamber_air->second * std::round(value / chamber_air->second);
+    }
+    run.column_names.emplace_back(kMeasuredAir);
+    run.columns.push_back(std::move(measured));
+  }
+  return run;
+}
+
+// The log a model is fitted on or judged on: the axes' thermometers, and the measured
+// chamber air as a fourth channel when the run has it.
+ChamberLog log_of(const sim::ChamberRun& run) {
+  ChamberLog log = sim::to_chamber_log(run);
+  const auto air = std::find(run.column_names.begin(), run.column_names.end(), kMeasuredAir);
+  if (air != run.column_names.end()) {
+    log.temperature_names.emplace_back(kMeasuredAir);
+    log.temperature.push_back(run.columns[static_cast<std::size_t>(air - run.column_names.begin())]);
+  }
+  return log;
+}
+
 TestLog make_test(std::string name, const sim::ChamberRun& run) {
   const auto first_row = static_cast<std::size_t>(std::llround(settle_s * run.rate_hz));
-  return {std::move(name), sim::to_chamber_log(run), run.noise_floor(smoothing_s, first_row), run, {}};
+  return {std::move(name), log_of(run), run.noise_floor(smoothing_s, first_row), run, {}};
 }
 
 // Rows [begin, end) of every regressor.
@@ -495,7 +536,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     return oracle ? sim::law_regressors(unit, programme) : sim::LawRegressors{};
   };
   const sim::Setpoint training_programme = sim::draw_profile(sim::ProfileKind::cycle, unit, seed, 2);
-  const sim::ChamberRun training_run = sim::simulate_unit(unit, training_programme, sim::derive_seed(seed, 1));
+  const sim::ChamberRun training_run = simulate(unit, training_programme, sim::derive_seed(seed, 1), args.chamber_air);
   const sim::LawRegressors training_regressors = regressors_of(training_programme);
   const std::size_t second_cycle = training_run.cycle_start_rows().at(1);
   // --training-noise K: cycle 1 of the same programme with another noise draw (ARW, bias
@@ -503,20 +544,20 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   const auto training_draw = [&](std::uint64_t draw) {
     if (draw == 0 && args.training_quiet.empty()) return slice(training_run, 0, second_cycle);
     const sim::UnitLaw& drawn = args.training_quiet.empty() ? unit : quiet_unit(unit, args.training_quiet);
-    return slice(sim::simulate_unit(drawn, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw)), 0,
-                 second_cycle);
+    return slice(simulate(drawn, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw), args.chamber_air),
+                 0, second_cycle);
   };
   const sim::ChamberRun first = training_draw(args.training_noise);
   const sim::LawRegressors first_regressors = oracle ? slice(training_regressors, 0, second_cycle) : sim::LawRegressors{};
-  std::vector<ChamberLog> training{sim::to_chamber_log(first)};
+  std::vector<ChamberLog> training{log_of(first)};
   std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>> oracle_training{{&first, &first_regressors}};
   sim::ChamberRun second_run;
   sim::LawRegressors second_regressors;
   if (args.two_runs) {
     const sim::Setpoint programme = sim::draw_profile(second_training_profile(seed), unit, sim::derive_seed(seed, 14));
-    second_run = sim::simulate_unit(unit, programme, sim::derive_seed(seed, 4));
+    second_run = simulate(unit, programme, sim::derive_seed(seed, 4), args.chamber_air);
     second_regressors = regressors_of(programme);
-    training.push_back(sim::to_chamber_log(second_run));
+    training.push_back(log_of(second_run));
     oracle_training.emplace_back(&second_run, &second_regressors);
   }
   const std::array<double, 3> training_floor = first.noise_floor(smoothing_s);
@@ -529,14 +570,14 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   std::uint64_t stream = 2;
   for (sim::ProfileKind kind : other_profiles(seed)) {
     const sim::Setpoint programme = sim::draw_profile(kind, unit, sim::derive_seed(seed, 10 + stream));
-    tests.push_back(make_test(sim::to_string(kind), sim::simulate_unit(unit, programme, sim::derive_seed(seed, stream))));
+    tests.push_back(make_test(sim::to_string(kind), simulate(unit, programme, sim::derive_seed(seed, stream), args.chamber_air)));
     tests.back().regressors = regressors_of(programme);
     ++stream;
   }
   // A diagnostic beside the tests: cycle 2 judged on the same rows with the lags carried
   // over from cycle 1, as a running compensator would. Where it is much lower than "next
   // cycle", 1800 s of settling was too short for the model's lags, not the model wrong.
-  TestLog carried{carried_test, sim::to_chamber_log(training_run), tests.front().floor, training_run,
+  TestLog carried{carried_test, log_of(training_run), tests.front().floor, training_run,
                   training_regressors,
                   second_cycle + static_cast<std::size_t>(std::llround(settle_s * training_run.rate_hz))};
   tests.push_back(std::move(carried));
@@ -579,7 +620,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
       std::vector<DriftModel> bagged;
       for (std::size_t b = 1; b < args.bag && !interrupted.load(); ++b) {
         std::vector<ChamberLog> resampled = training;  // with --training two-runs, the second run too
-        resampled.front() = sim::to_chamber_log(training_draw(args.training_noise + b));
+        resampled.front() = log_of(training_draw(args.training_noise + b));
         CalibrationOptions draw_options = options;
         if (chooses_features(options)) draw_options.selections = select_features_per_axis(resampled, options);
         bagged.push_back(calibrate(resampled, LogSpec{}, draw_options).model);
@@ -727,6 +768,8 @@ int main(int argc, char** argv) {
                           {"training_noise", args.training_noise},
                           {"bag", args.bag},
                           {"folds_by", to_string(args.folds_by)},
+                          {"chamber_air", args.chamber_air ? nlohmann::json{args.chamber_air->first, args.chamber_air->second}
+                                                           : nlohmann::json(nullptr)},
                           {"interrupted", stopped},
                           {"laws", laws_json(done)}};
     write_file_atomically(args.json, out.dump(1) + "\n");
