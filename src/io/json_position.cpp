@@ -107,7 +107,8 @@ TextPosition JsonPositions::of(std::string_view pointer) const {
   while (true) {
     if (const auto found = positions_.find(std::string(pointer)); found != positions_.end()) return found->second;
     if (pointer.empty()) return {0, 0};
-    pointer = pointer.substr(0, pointer.rfind('/'));
+    const auto slash = pointer.rfind('/');
+    pointer = slash == std::string_view::npos ? std::string_view() : pointer.substr(0, slash);
   }
 }
 

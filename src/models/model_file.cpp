@@ -434,8 +434,14 @@ DriftModel load_drift_model(const std::string& path) {
     // must still be bad data naming the file, not an internal failure.
     throw DataError(path, 0, 0, fmt::format("model file is not valid JSON: {}", without_json_tag(e)));
   }
-  const JsonPositions positions(text);
-  return drift_model_from_json(json, path, &positions);
+  try {
+    return drift_model_from_json(json, path);
+  } catch (const DataError&) {
+    // Only a refused file pays for indexing its text: read again, the same refusal comes
+    // with the line and column of the value refused.
+    const JsonPositions positions(text);
+    return drift_model_from_json(json, path, &positions);
+  }
 }
 
 }  // namespace thermodrift

@@ -27,6 +27,7 @@ TEST(JsonPositions, EveryValueByItsPointer) {
   // Not in the text: the value that would hold it.
   EXPECT_EQ(positions.of("/a/1/missing"), TextPosition(2, 12));
   EXPECT_EQ(positions.of("/nothing/at/all"), TextPosition(1, 1));
+  EXPECT_EQ(positions.of("no slash"), TextPosition(1, 1));  // not a pointer: the whole text
 }
 
 TEST(JsonPositions, AByteOrderMarkIsNoColumn) {
