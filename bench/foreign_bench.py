@@ -71,8 +71,7 @@ def law(seed, args):
             start = time.monotonic()
             try:
                 fitted = json.loads(run([args.thermodrift, "fit", "--data", train, *COLUMNS, "--model", method,
-                                         "--features", "auto", "--threads", "1",
-                                         *(["--seed", "1"] if method == "svr" else []), *args.fit_option,
+                                         "--features", "auto", "--threads", "1", "--seed", "1", *args.fit_option,
                                          "--out", model, "--json"]))
             except RuntimeError as error:
                 result["methods"][method] = {"error": str(error)}

@@ -54,12 +54,6 @@ FitRun fit_from_arguments(const FitArguments& args, const CLI::App& app, std::ve
   } else {
     tuned = check_svr_parameters(app);
   }
-  // The tuner's search is the only random choice of a fit.
-  if (app.count("--seed") && !tuned) {
-    throw UsageError(kind == ModelKind::svr
-                         ? std::string("--seed seeds the tuning of C and σ, not a fit with --C and --sigma given")
-                         : fmt::format("--seed seeds the SVR's tuning; --model {} makes no random choice", args.model));
-  }
   const bool auto_features = args.features.size() == 1 && args.features.front() == "auto";
   check_identify(app, args.features);
   if (app.count("--folds-by") && !auto_features && !tuned) {

@@ -210,15 +210,13 @@ def _is_path(data):
     return isinstance(data, (str, os.PathLike))
 
 
-def fit(data, model="linear", features=None, seed=None, progress=None, **options):
+def fit(data, model="linear", features=None, seed=1, progress=None, **options):
     """Fits one drift model per gyro axis, as ``thermodrift fit`` does: a DriftModel.
 
     ``data``: a path, a DataFrame (``read_log``'s, or any with time, gyro* and temp*
     columns; ``time=``, ``gyro=``, ``temp=`` name others), or a list of either (several
     runs fitted together). ``features``: None (the paper's dT, rate), ``"auto"``, or a list
-    of terms. ``seed``: the SVR tuning's (``--seed``; None: the tuning's default, 1; refused
-    where nothing is tuned, as on the command line). Every other option of
-    ``thermodrift fit`` is a keyword (``C``, ``sigma``,
+    of terms. Every other option of ``thermodrift fit`` is a keyword (``C``, ``sigma``,
     ``evaluations``, ``rate_span``, ``identify``, ``threads``, ...). ``progress``: None
     for a bar on stderr, False for none, or ``f(axis, axes, fraction, message)``; a false
     return value stops the fit (KeyboardInterrupt).

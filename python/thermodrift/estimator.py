@@ -19,7 +19,7 @@ class DriftRegressor(RegressorMixin, BaseEstimator):
     ``thermodrift fit`` as a dict (``{"rate_span": 50}``).
     """
 
-    def __init__(self, model="linear", features=None, seed=None, smooth=100.0, C=None, sigma=None, epsilon=None,
+    def __init__(self, model="linear", features=None, seed=1, smooth=100.0, C=None, sigma=None, epsilon=None,
                  evaluations=None, threads=0, gyro=None, temp=None, options=None, progress=False):
         self.model = model
         self.features = features
