@@ -443,7 +443,10 @@ struct JudgedRows {
   std::vector<std::size_t> row;
   Eigen::VectorXd target, predicted;
 };
-JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t axis, double settle = settle_s) {
+// With `evaluated` (evaluate_axes' result for this axis), its prediction of the same rows,
+// from the log start it was asked for, in place of the model's from power-on.
+JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t axis, double settle = settle_s,
+                      const AxisEvaluation* evaluated = nullptr) {
   const auto& axis_model = model.axes[axis];
   const auto channel = temperature_channel_per_axis(test.log).at(axis);
   const FeatureTable table = build_feature_table(axis_model.pipeline, test.log, axis, channel, false);
@@ -457,7 +460,13 @@ JudgedRows judge_axis(const DriftModel& model, const TestLog& test, std::size_t 
     judged.row.push_back(table.row[i]);
   }
   judged.target = table.target(kept);
-  judged.predicted = axis_model.predict(table.features(kept, Eigen::all));
+  if (evaluated == nullptr) {
+    judged.predicted = axis_model.predict(table.features(kept, Eigen::all));
+  } else {
+    if (evaluated->rows != judged.row) throw std::runtime_error("evaluate judged other rows than the bench");
+    judged.predicted = Eigen::Map<const Eigen::VectorXd>(evaluated->predicted.data(),
+                                                         static_cast<Eigen::Index>(evaluated->predicted.size()));
+  }
   return judged;
 }
 
@@ -657,12 +666,7 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
                                        : evaluate_axes(model, {test.log}, settle_s, {}, args.log_start);
         };
         auto judged_rows = [&](const DriftModel& model, const std::vector<AxisEvaluation>& evaluations, std::size_t a) {
-          JudgedRows rows = judge_axis(model, test, a);
-          if (test.carried_from_row) return rows;
-          if (evaluations.at(a).rows != rows.row) throw std::runtime_error("evaluate judged other rows than the bench");
-          rows.predicted = Eigen::Map<const Eigen::VectorXd>(evaluations[a].predicted.data(),
-                                                             static_cast<Eigen::Index>(evaluations[a].predicted.size()));
-          return rows;
+          return judge_axis(model, test, a, settle_s, evaluations.empty() ? nullptr : &evaluations.at(a));
         };
         const std::vector<AxisEvaluation> evaluations = evaluated(calibration.model);
         std::vector<std::vector<AxisEvaluation>> bagged_evaluations;

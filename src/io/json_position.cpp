@@ -82,6 +82,19 @@ class Scanner {
 
 }  // namespace
 
+TextPosition text_position(std::string_view text, std::size_t index) {
+  TextPosition at{1, 1};
+  for (std::size_t i = 0; i < index && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++at.first;
+      at.second = 1;
+    } else {
+      ++at.second;
+    }
+  }
+  return at;
+}
+
 std::string json_pointer_child(std::string_view parent, std::string_view key) {
   std::string out(parent);
   out += '/';

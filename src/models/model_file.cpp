@@ -416,18 +416,10 @@ DriftModel load_drift_model(const std::string& path) {
   try {
     json = parse_without_duplicate_keys(text, path);
   } catch (const nlohmann::json::parse_error& e) {
-    // Turn the byte offset into line and column for the one-line error.
-    std::size_t line = 1, column = 1;
-    for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
-    }
+    // nlohmann's byte count is 1-based: the character it stopped at.
+    const TextPosition at = text_position(text, e.byte > 0 ? e.byte - 1 : 0);
     const bool truncated = e.byte >= text.size();
-    throw DataError(path, line, column,
+    throw DataError(path, at.first, at.second,
                     truncated ? "model file ends early (truncated?)" : "model file is not valid JSON");
   } catch (const nlohmann::json::exception& e) {
     // A number too large for a double ("1e999") is out_of_range, not a parse_error; it

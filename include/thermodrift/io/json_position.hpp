@@ -27,6 +27,9 @@ class JsonPositions {
   std::unordered_map<std::string, TextPosition> positions_;
 };
 
+// The line and column of the character at `index` in `text` (the end, if beyond it).
+TextPosition text_position(std::string_view text, std::size_t index);
+
 // A member's JSON pointer below `parent`: "/" then the key with ~ and / escaped.
 std::string json_pointer_child(std::string_view parent, std::string_view key);
 
