@@ -79,6 +79,9 @@ int run_demo(const DemoArguments& args) {
   ReportResult result = write_report(log, spec, options);
   out.commit();
   print_report_tables(result.summary);
+  for (const auto& warning : result.summary.at("warnings")) {
+    fmt::print(stderr, "thermodrift demo: warning: {}\n", warning.get<std::string>());
+  }
   if (!result.figures_drawn) fmt::print(stderr, "thermodrift demo: warning: {}\n", result.figures_note);
   fmt::print("\nlog:     {}\nreport:  {}\nsummary: {}\n", log_path, out.committed_path(result.html_path),
              out.committed_path(result.summary_path));

@@ -185,7 +185,7 @@ int run_fit(const FitArguments& args, const CLI::App& app) {
       add_noise_floor(entry, estimate_noise_floor(logs, a, axis.pipeline.smooth_seconds));
     }
     add_expected_held_out(entry, axis.fit);
-    if (const auto warning = far_from_floor_warning(entry)) warn_and_keep(*warning);
+    if (const auto warning = far_from_floor_warning(entry, logs.size())) warn_and_keep(*warning);
     if (const auto& compressed = axis.fit.compressed) {
       entry["compressed"] = to_json(*compressed);
       if (!args.json) {

@@ -33,19 +33,14 @@ void add_expected_held_out(nlohmann::json& axis, const FitRecord& fit) {
   axis["expected_held_out"] = expected;
 }
 
-std::optional<std::string> far_from_floor_warning(const nlohmann::json& axis) {
+std::optional<std::string> far_from_floor_warning(const nlohmann::json& axis, std::size_t training_logs) {
   const bool held_out = axis.contains("expected_held_out") && axis["expected_held_out"].contains("x_floor_estimate");
   if (!held_out && !axis.contains("mse_after_x_floor")) return std::nullopt;
   const double ratio = held_out ? axis["expected_held_out"]["x_floor_estimate"].get<double>()
                                 : axis["mse_after_x_floor"].get<double>();
-  if (!(ratio > kFarFromFloor)) return std::nullopt;
   const bool searched = axis.contains("feature_selection");  // --features auto
-  return fmt::format(
-      "{}: {} {:.3g} × the noise floor estimate: the model does not describe this unit's drift down to the noise, "
-      "and such models often miss other programmes by 10 times the floor or more; {}another chamber programme in "
-      "training (--data for each) helps most",
-      axis.at("name").get<std::string>(), held_out ? "its expected held-out MSE is" : "on its training data it leaves",
-      ratio, searched ? "" : "--features auto, or ");
+  return thermodrift::far_from_floor_warning({{axis.at("name").get<std::string>(), ratio}}, held_out, searched,
+                                             training_logs);
 }
 
 void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor) {

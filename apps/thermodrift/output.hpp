@@ -22,16 +22,10 @@ void add_noise_floor(nlohmann::json& axis, const NoiseFloorEstimate& floor);
 // noise-floor estimate when add_noise_floor set one. Nothing when the fit had no CV.
 void add_expected_held_out(nlohmann::json& axis, const FitRecord& fit);
 
-// A model whose expected held-out MSE (or, for a fit without CV, its in-sample MSE) is more
-// than this many times the noise-floor estimate does not describe the unit's drift down to
-// the noise, and such models often miss other programmes by far: of the development laws'
-// axes above it, 30 of 40 missed another programme by more than 10 times the floor, of
-// those below it 28 of 80 (docs/generalization.md, "Far from the floor").
-inline constexpr double kFarFromFloor = 2.0;
-
 // fit's warning for an axis (set up by add_noise_floor and add_expected_held_out) beyond
-// kFarFromFloor, naming the figure; nothing when it is within or there is no estimate.
-std::optional<std::string> far_from_floor_warning(const nlohmann::json& axis);
+// kFarFromFloor (tune/calibration.hpp), naming the figure; nothing when it is within or
+// there is no estimate. `training_logs`: the logs it was fitted on.
+std::optional<std::string> far_from_floor_warning(const nlohmann::json& axis, std::size_t training_logs);
 
 // One line on stdout for an axis' compression record (fit.compressed, SvrModel's
 // compress): support vectors before and after, the prediction's change, and the MSE

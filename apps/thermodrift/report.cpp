@@ -93,6 +93,7 @@ int run_report(const ReportArguments& args) {
       }
     }
   }
+  for (const auto& warning : result.summary.at("warnings")) warn(warning.get<std::string>());
   if (!result.figures_drawn) warn(result.figures_note);
   fmt::print("\nreport: {}\nsummary: {}\n", result.html_path, result.summary_path);
   return 0;

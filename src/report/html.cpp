@@ -75,14 +75,14 @@ void expected_against_held_out(std::ostringstream& page, const nlohmann::json& t
       if (!cell.contains("expected_mse")) continue;
       rows << "<tr><td>" << escape(row["axis"].get<std::string>()) << "</td><td>"
            << escape(t["columns"][i]["label"].get<std::string>()) << "</td><td>" << num(cell["expected_mse"])
-           << "</td><td>" << num(cell["mse"]) << "</td><td>" << escape(cell["expected_from"].get<std::string>())
-           << "</td></tr>\n";
+           << "</td><td>" << num(cell.value("expected_x_floor_estimate", nlohmann::json())) << "</td><td>"
+           << num(cell["mse"]) << "</td><td>" << escape(cell["expected_from"].get<std::string>()) << "</td></tr>\n";
     }
   }
   if (rows.str().empty()) return;
   page << "<table>\n<caption>Expected held-out MSE (blocked CV on the training part, as <code>fit</code> prints it) "
           "against the held-out MSE</caption>\n<tr><th>axis</th><th>model</th><th>expected (°/h)²</th>"
-          "<th>held-out (°/h)²</th><th>expected from</th></tr>\n"
+          "<th>expected × floor estimate</th><th>held-out (°/h)²</th><th>expected from</th></tr>\n"
        << rows.str() << "</table>\n";
 }
 
@@ -168,6 +168,12 @@ std::string render_html(const nlohmann::json& summary, const FigureOutcome& figu
   table(page, summary["tables"]["in_sample"], floor_known, "Table 1 — in-sample (fitted and judged on the training part, as the paper reports)");
   table(page, summary["tables"]["held_out"], floor_known, "Table 2 — held-out (judged on the later part the models never saw)");
   expected_against_held_out(page, summary["tables"]["held_out"]);
+  if (summary.contains("warnings") && !summary["warnings"].empty()) {
+    page << "<p>Far from the noise floor (as <code>fit</code> warns; docs/generalization.md, “Far from the "
+            "floor”):</p>\n<ul>\n";
+    for (const auto& warning : summary["warnings"]) page << "<li>" << escape(warning.get<std::string>()) << "</li>\n";
+    page << "</ul>\n";
+  }
 
   if (summary.contains("feature_selection") && !summary["feature_selection"].empty()) {
     const auto& first = summary["feature_selection"][0]["selection"];

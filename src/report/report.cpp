@@ -10,6 +10,7 @@
 #include "report_parts.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/features/moving_average.hpp"
+#include "thermodrift/features/noise_floor.hpp"
 #include "thermodrift/io/atomic_file.hpp"
 #include "thermodrift/report/allan.hpp"
 #include "thermodrift/report/cross_axis.hpp"
@@ -280,6 +281,16 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
       floor_out[a] = noise_floor(log, a, options.true_drift[a], pipeline.smooth_seconds, study.split_row, log.rows());
     }
   }
+  // The noise floor as fit estimates it from the training part alone, for fit's figure
+  // (expected held-out MSE over it) and its far-from-floor warning.
+  std::vector<double> floor_estimate(axes, NAN);
+  if (pipeline.smooth_seconds > 0) {
+    for (std::size_t a = 0; a < axes; ++a) {
+      const auto estimate = estimate_noise_floor(std::span(log.time).first(study.split_row),
+                                                 std::span(log.gyro[a]).first(study.split_row), pipeline.smooth_seconds);
+      if (estimate.usable() && estimate.variance > 0) floor_estimate[a] = estimate.variance;
+    }
+  }
   // Table 1's column order: original drift, SVR, linear, then stepwise.
   std::vector<std::size_t> order;
   for (ModelKind kind : {ModelKind::svr, ModelKind::linear, ModelKind::stepwise}) {
@@ -316,6 +327,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
         if (is_held_out && expected) {
           cell["expected_mse"] = expected->cv_mse;
           cell["expected_from"] = expected->from;
+          cell["expected_x_floor_estimate"] = number_or_null(expected->cv_mse / floor_estimate[a]);
         }
         cells.push_back(cell);
       }
@@ -325,6 +337,29 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     tables[is_held_out ? "held_out" : "in_sample"] = {{"columns", columns}, {"rows", rows}};
   }
   summary["tables"] = tables;
+
+  // fit's far-from-floor warning, one line per model: the expected held-out MSE (the
+  // in-sample MSE for a fit without CV) over the training part's floor estimate.
+  nlohmann::json warnings = nlohmann::json::array();
+  for (auto m : order) {
+    const ModelStudy& model = study.models[m];
+    std::vector<FloorRatio> held_out, in_sample;
+    for (std::size_t a = 0; a < axes; ++a) {
+      if (!std::isfinite(floor_estimate[a])) continue;
+      if (const auto expected = expected_held_out(model.calibration.model.axes[a].fit)) {
+        held_out.push_back({log.gyro_names[a], expected->cv_mse / floor_estimate[a]});
+      } else {
+        in_sample.push_back({log.gyro_names[a], model.in_sample[a].mse_after / floor_estimate[a]});
+      }
+    }
+    const bool searched = model.features == "auto";
+    for (const bool is_held_out : {true, false}) {
+      if (const auto line = far_from_floor_warning(is_held_out ? held_out : in_sample, is_held_out, searched, 1)) {
+        warnings.push_back(fmt::format("{} ({}): {}", to_string(model.model), model.features, *line));
+      }
+    }
+  }
+  summary["warnings"] = warnings;
 
   // How the terms were chosen, axis by axis (--features auto): the models share one
   // least-squares search, whose path the SVR's record extends with the sets it judged.

@@ -1,6 +1,7 @@
 #include "thermodrift/tune/calibration.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <atomic>
 #include <chrono>
@@ -316,6 +317,29 @@ std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetri
         axis.name, in_sample.mse_after, in_sample.mse_before));
   }
   return warnings;
+}
+
+std::optional<std::string> far_from_floor_warning(const std::vector<FloorRatio>& axes, bool held_out, bool searched,
+                                                  std::size_t training_logs) {
+  std::vector<std::string> names;
+  std::vector<std::string> ratios;
+  for (const auto& axis : axes) {
+    if (!(axis.ratio > kFarFromFloor)) continue;
+    names.push_back(axis.axis);
+    ratios.push_back(fmt::format("{:.3g}", axis.ratio));
+  }
+  if (names.empty()) return std::nullopt;
+  const bool one = names.size() == 1;
+  const std::string figure = held_out ? (one ? "its expected held-out MSE is" : "their expected held-out MSEs are")
+                                      : (one ? "on its training data it leaves" : "on their training data they leave");
+  const std::string remedy = training_logs > 1
+                                 ? "a further chamber programme in training, at other rates and over other ranges, helps most"
+                                 : "another chamber programme in training (--data for each) helps most";
+  return fmt::format(
+      "{}: {} {} × the noise floor estimate: the model does not describe this unit's drift down to the noise, and such models "
+      "often miss other programmes by 10 times the floor or more; {}{}",
+      fmt::join(names, ", "), figure, fmt::join(ratios, " / "),
+      searched ? "" : "--features auto, or ", remedy);
 }
 
 std::optional<ExpectedHeldOut> expected_held_out(const FitRecord& fit) {

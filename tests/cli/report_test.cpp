@@ -165,6 +165,15 @@ void summary_numbers_are_those_on_the_page(const std::string& html, const nlohma
     }
   }
   EXPECT_EQ(expected, 3U) << "one per axis: the SVR is tuned by CV, the paper's linear fits are not";
+  // Over the training part's floor estimate, as fit prints it; far from the floor, warned.
+  for (const auto& row : s["tables"]["held_out"]["rows"]) {
+    for (const auto& cell : row["models"]) {
+      if (!cell.contains("expected_mse")) continue;
+      const double ratio = cell["expected_x_floor_estimate"].get<double>();
+      EXPECT_GT(ratio, 2.0) << "the paper's pair on the simulator's unit";
+      EXPECT_NE(html.find(">" + format_number(ratio) + "<"), std::string::npos) << ratio;
+    }
+  }
   EXPECT_NE(html.find("Expected held-out MSE"), std::string::npos);
   for (const auto& c : s["cross_axis"]) {
     EXPECT_NE(html.find(">" + format_number(c["held_out_mse"].get<double>()) + "<"), std::string::npos);
@@ -173,6 +182,22 @@ void summary_numbers_are_those_on_the_page(const std::string& html, const nlohma
   EXPECT_EQ(s["split"]["description"], "last 50 % of the log held out");
   EXPECT_NE(html.find("last 50 % of the log held out"), std::string::npos);
   EXPECT_NE(html.find("Which table to believe: the held-out one."), std::string::npos);
+}
+
+// The paper's pair leaves hundreds of times the floor on the simulator's unit: one line per
+// model, on stderr, in the summary and on the page.
+void far_from_the_floor_is_warned(const testing::CommandResult* result_, const std::string& html,
+                                  const nlohmann::json& s) {
+  const auto& warnings = s.at("warnings");
+  ASSERT_EQ(warnings.size(), 3U) << warnings;
+  bool linear = false;
+  for (const auto& warning : warnings) {
+    const auto text = warning.get<std::string>();
+    EXPECT_NE(result_->err.find("thermodrift: warning: " + text), std::string::npos) << text;
+    EXPECT_NE(html.find(text), std::string::npos) << text;
+    linear = linear || text.rfind("linear (dT,rate): gyro_x, gyro_y, gyro_z: on their training data they leave", 0) == 0;
+  }
+  EXPECT_TRUE(linear) << warnings;
 }
 
 TEST_F(Report, PageFiguresAndSummaryAgree) {
@@ -190,6 +215,10 @@ TEST_F(Report, PageFiguresAndSummaryAgree) {
   {
     SCOPED_TRACE("summary numbers are those on the page");
     summary_numbers_are_those_on_the_page(html, summary_json);
+  }
+  {
+    SCOPED_TRACE("far from the floor is warned");
+    far_from_the_floor_is_warned(result_, html, summary_json);
   }
 }
 

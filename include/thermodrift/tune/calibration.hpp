@@ -108,6 +108,27 @@ bool chooses_features(const CalibrationOptions& options);
 // that leaves more drift than it found on its own training data.
 std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetrics& in_sample);
 
+// A model whose expected held-out MSE (or, for a fit without CV, its in-sample MSE) is more
+// than this many times the noise-floor estimate does not describe the unit's drift down to
+// the noise, and such models often miss other programmes by far: of the development laws'
+// axes above it, 30 of 40 missed another programme by more than 10 times the floor, of
+// those below it 28 of 80 (docs/generalization.md, "Far from the floor").
+inline constexpr double kFarFromFloor = 2.0;
+
+// One axis' figure over the noise-floor estimate, for far_from_floor_warning.
+struct FloorRatio {
+  std::string axis;
+  double ratio = 0;
+};
+
+// The warning, one line, for the axes of one model whose ratio is above kFarFromFloor
+// (nothing when none is): `held_out` says the ratio is the expected held-out MSE's (else the
+// in-sample MSE's), `searched` that the terms were chosen (--features auto; else the line
+// names it as a remedy), `training_logs` how many logs the model was fitted on (with more
+// than one, the advice is a further programme at other rates and ranges).
+std::optional<std::string> far_from_floor_warning(const std::vector<FloorRatio>& axes, bool held_out, bool searched,
+                                                  std::size_t training_logs);
+
 // What an axis' fit expects held out: the CV MSE (°/h)² its choices were scored by
 // (the tuned SVR's CV, else the feature search's least-squares CV) and where it comes from.
 // A selection score on the training data, so an estimate, not a held-out measurement.

@@ -1,6 +1,8 @@
 // fit_warnings: what fit and report must say about a fitted axis.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "thermodrift/tune/calibration.hpp"
 
 namespace thermodrift {
@@ -33,6 +35,26 @@ TEST(FitWarnings, NamesAnUnconvergedSvrAndAModelWorseThanABias) {
   svr.converged = true;
   axis.model = svr;
   EXPECT_TRUE(fit_warnings(axis, metrics(1.0, 0.2)).empty());
+}
+
+// Far from the floor: only the axes above kFarFromFloor, each with its figure; the
+// remedy fits what the model already had (its terms searched, more than one log).
+TEST(FarFromFloorWarning, NamesOnlyTheAxesAboveItWithTheirFigures) {
+  EXPECT_FALSE(far_from_floor_warning({{"x", 1.2}, {"y", kFarFromFloor}}, true, true, 1));
+  EXPECT_FALSE(far_from_floor_warning({{"x", std::nan("")}}, true, true, 1));  // no estimate: nothing said
+
+  const auto two = far_from_floor_warning({{"gyro_x", 3.3}, {"gyro_y", 1.1}, {"gyro_z", 250.0}}, true, true, 1);
+  ASSERT_TRUE(two);
+  EXPECT_EQ(two->rfind("gyro_x, gyro_z: their expected held-out MSEs are 3.3 / 250 × the noise floor estimate", 0), 0u) << *two;
+  EXPECT_EQ(two->find("gyro_y"), std::string::npos) << *two;
+  EXPECT_EQ(two->find("--features auto"), std::string::npos) << *two;  // searched already
+  EXPECT_NE(two->find("another chamber programme in training (--data for each)"), std::string::npos) << *two;
+
+  const auto one = far_from_floor_warning({{"gyro_y", 5.0}}, false, false, 2);
+  ASSERT_TRUE(one);
+  EXPECT_EQ(one->rfind("gyro_y: on its training data it leaves 5 × the noise floor estimate", 0), 0u) << *one;
+  EXPECT_NE(one->find("--features auto, or a further chamber programme"), std::string::npos) << *one;
+  EXPECT_EQ(one->find("another chamber programme"), std::string::npos) << *one;  // it had two already
 }
 
 }  // namespace
