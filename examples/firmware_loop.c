@@ -15,12 +15,12 @@
  *
  *   t=   0 s  T=20.00 degC  raw x= 15.500 deg/h  compensated x= 14.543 deg/h  (warm-up)
  *   t= 200 s: ready, using compensated rates
- *   t= 300 s  T=25.00 degC  raw x= 15.650 deg/h  compensated x= 13.327 deg/h
- *   t= 600 s  T=30.00 degC  raw x= 15.800 deg/h  compensated x= 13.351 deg/h
+ *   t= 300 s  T=25.00 degC  raw x= 15.650 deg/h  compensated x= 13.307 deg/h
+ *   t= 600 s  T=30.00 degC  raw x= 15.800 deg/h  compensated x= 13.331 deg/h
  *   t= 900 s: warming up, using raw rates
  *   t= 900 s  T=35.00 degC  raw x= 15.950 deg/h  compensated x= 14.616 deg/h  (warm-up)
  *   t=1100 s: ready, using compensated rates
- *   t=1200 s  T=40.00 degC  raw x= 16.100 deg/h  compensated x= 13.400 deg/h
+ *   t=1200 s  T=40.00 degC  raw x= 16.100 deg/h  compensated x= 13.379 deg/h
  *   dropped samples: 0
  *
  * Ready after 200 s (100 s smoothing + 100 s rate span), again 200 s after the gap. The

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "thermodrift/compensate/compensator.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/features/moving_average.hpp"
 #include "thermodrift/features/terms.hpp"
@@ -114,6 +115,34 @@ std::string runtime_in(const std::string& p) {
     }
   }
   return out;
+}
+
+// The statements that set state->drift[a] from the model's prediction: advanced by the
+// smoothing window's lag along its slope, as Compensator::push does, operation for
+// operation (compensate/compensator.hpp); the prediction itself without smoothing.
+std::string drift_at_sample_time(const std::string& p, std::size_t a, const Pipeline& pipeline) {
+  const double tau = Compensator::kDriftSlopeFraction * pipeline.smooth_seconds;
+  if (!(tau > 0)) return fmt::format("    state->drift[{a}] = {p}_axis{a}_drift(features);\n", fmt::arg("p", p), fmt::arg("a", a));
+  return fmt::format(
+      "    {{\n"
+      "      /* the model predicts the smoothed drift, half the window behind this sample: advanced\n"
+      "       * to the sample's time along its slope */\n"
+      "      const {p}_real smoothed = {p}_axis{a}_drift(features);\n"
+      "      const {p}_channel_state* window = &state->axis[{a}].temperature;\n"
+      "      const double step = state->axis[{a}].step_seconds;\n"
+      "      const double lead = (time - window->mean_ring[window->mean_head].time) / 2;\n"
+      "      if (step > 0) {{  /* a {tau} s lag, exact for a straight line between samples */\n"
+      "        const {p}_real decay = ({p}_real){P}_EXP(({p}_real)(-step / {tau}));\n"
+      "        state->axis[{a}].trend = decay * state->axis[{a}].trend + (({p}_real)1 - decay) * smoothed +\n"
+      "                               (smoothed - state->axis[{a}].smoothed_drift) *\n"
+      "                                   (decay - (({p}_real)1 - decay) * ({p}_real)({tau} / step));\n"
+      "      }} else {{\n"
+      "        state->axis[{a}].trend = smoothed;\n"
+      "      }}\n"
+      "      state->drift[{a}] = smoothed + ({p}_real)(lead / {tau}) * (smoothed - state->axis[{a}].trend);\n"
+      "      state->axis[{a}].smoothed_drift = smoothed;\n"
+      "    }}\n",
+      fmt::arg("p", p), fmt::arg("P", upper(p)), fmt::arg("a", a), fmt::arg("tau", Literal::time(tau)));
 }
 
 }  // namespace
@@ -390,11 +419,11 @@ std::string export_c_header(const DriftModel& model, const CExportOptions& optio
       }
     }
     out += fmt::format(
-        "    state->drift[{a}] = {p}_axis{a}_drift(features);\n"
+        "{advance}"
         "  }}\n"
         "  compensated[{a}] = gyro[{a}] - (double)state->drift[{a}];\n"
         "  if (!isfinite(compensated[{a}])) ready = 0;  /* never a non-finite output flagged valid */\n",
-        fmt::arg("p", p), fmt::arg("a", a));
+        fmt::arg("p", p), fmt::arg("a", a), fmt::arg("advance", drift_at_sample_time(p, a, model.axes[a].pipeline)));
   }
   out += fmt::format(
       "  if (dropped) {{\n"

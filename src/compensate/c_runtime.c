@@ -61,6 +61,8 @@ typedef struct {
   double start_time;
   double last_time;
   double step_seconds;               /* since the previous sample; 0 at a (re)start */
+  tdrt_real trend;                   /* a lag of the model's prediction (of the smoothed drift), for its slope */
+  tdrt_real smoothed_drift;          /* the model's prediction at the previous sample */
   tdrt_real filters[TDRT_FILTERS][2];  /* lag states of the feature terms, two per factor */
 } tdrt_axis_state;
 
@@ -135,6 +137,8 @@ static inline void tdrt_init(tdrt_state* state) {
 #endif
     state->axis[a].start_time = 0;
     state->axis[a].last_time = 0;
+    state->axis[a].trend = 0;
+    state->axis[a].smoothed_drift = 0;
     state->drift[a] = 0;
   }
   state->dropped_samples = 0;

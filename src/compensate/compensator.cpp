@@ -9,7 +9,8 @@
 namespace thermodrift {
 
 Compensator::Compensator(DriftModel model)
-    : model_(std::move(model)), drift_(model_.axes.size()),
+    : model_(std::move(model)), drift_(model_.axes.size()), trend_(model_.axes.size()), previous_smoothed_(model_.axes.size()),
+      previous_time_(model_.axes.size()),
       compensated_(model_.axes.size()),
       status_(model_.axes.size()) {
   for (const auto& axis : model_.axes) {
@@ -51,7 +52,27 @@ const Compensator::Output& Compensator::push(double time, std::span<const double
   bool ready = true;
   for (std::size_t a = 0; a < streams_.size(); ++a) {
     const auto& sample = streams_[a].push(time, gyro[a], temperatures[model_.axes[a].pipeline.temperature_input(a)], temperatures);
-    drift_[a] = model_.axes[a].predict(sample.features);
+    const double smoothed = model_.axes[a].predict(sample.features);
+    // Advanced by the window's lag along its slope (as the exported C header computes it,
+    // operation for operation): the slope from a τ-lag q of the prediction, stepped
+    // exactly for an input that moves in a straight line between samples, so that on a
+    // ramp q is the prediction τ before, whatever the step.
+    const double tau = kDriftSlopeFraction * model_.axes[a].pipeline.smooth_seconds;
+    if (tau > 0) {
+      const double step = sample.since_start > 0 ? time - previous_time_[a] : 0.0;
+      if (step > 0) {
+        const double decay = std::exp(-step / tau);
+        trend_[a] = decay * trend_[a] + (1.0 - decay) * smoothed +
+                    (smoothed - previous_smoothed_[a]) * (decay - (1.0 - decay) * (tau / step));
+      } else {
+        trend_[a] = smoothed;
+      }
+      drift_[a] = smoothed + sample.window_lag / tau * (smoothed - trend_[a]);
+    } else {
+      drift_[a] = smoothed;
+    }
+    previous_smoothed_[a] = smoothed;
+    previous_time_[a] = time;
     compensated_[a] = gyro[a] - drift_[a];
     const auto& envelope = model_.axes[a].envelope;
     // Never a non-finite value flagged valid (absurd inputs can overflow the model).

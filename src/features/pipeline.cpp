@@ -191,6 +191,7 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
   }
   last_time_ = time;
   sample_.smoothed_gyro = gyro_mean_.push(time, gyro);
+  sample_.window_lag = (time - gyro_mean_.oldest_time()) / 2;
   const SmoothedChannel::Value own = temperature_.push(time, temperature);
   sample_.smoothed_temperature = own.mean;
   sample_.smoothed_rate = own.rate;

@@ -24,6 +24,10 @@ class TrailingMean {
   // True once the samples seen since the last reset span the whole window.
   bool full() const { return count_ > 0 && newest_time_ - first_time_ >= window_; }
   double mean() const { return count_ == 0 ? 0.0 : sum_ / static_cast<double>(count_); }
+  // Time of the oldest sample in the window (the newest's when the window is empty of
+  // others; 0 before the first push): (newest - oldest) / 2 is how far the mean of an
+  // evenly sampled signal lags its newest sample.
+  double oldest_time() const { return count_ == 0 ? 0.0 : ring_[head_].time; }
   void reset();
 
  private:

@@ -100,6 +100,10 @@ class FeatureStream {
     bool ready = false;           // false during warm-up (after the start or a gap)
     double since_start = 0;       // s since the stream (re)started: lags settle over this
     double smoothed_gyro = 0;     // °/h, the drift target
+    // s: half the time the smoothing window's samples span, (newest - oldest) / 2. The
+    // window's mean of an evenly sampled signal is its value this long before the newest
+    // sample (to first order): the smoothed drift a model predicts lags the drift by it.
+    double window_lag = 0;
     double smoothed_temperature = 0;  // °C
     double smoothed_rate = 0;         // its dT/dt over the rate span, °C/min
     std::span<const double> features;  // one value per pipeline term
