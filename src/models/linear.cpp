@@ -279,6 +279,7 @@ StepwiseFit fit_stepwise(const Eigen::MatrixXd& features, const Eigen::VectorXd&
     std::ptrdiff_t best = -1;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       if (included[k] || n - p - 2 <= 0) continue;
+      options.stop.throw_if_requested("stepwise regression");
       const double rss_plus = residual_sum_of_squares(features, target, chosen(static_cast<std::ptrdiff_t>(k)));
       const double f = rss_plus > 0 ? (rss - rss_plus) / (rss_plus / (n - p - 2)) : INFINITY;
       if (f > best_f) {
@@ -301,6 +302,7 @@ StepwiseFit fit_stepwise(const Eigen::MatrixXd& features, const Eigen::VectorXd&
     std::ptrdiff_t worst = -1;
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       if (!included[k]) continue;
+      options.stop.throw_if_requested("stepwise regression");
       const double rss_minus = residual_sum_of_squares(features, target, chosen(static_cast<std::ptrdiff_t>(k)));
       const double f = rss_now > 0 ? (rss_minus - rss_now) / (rss_now / (n - p_now - 1)) : INFINITY;
       if (f < worst_f) {

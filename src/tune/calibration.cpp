@@ -488,10 +488,12 @@ FittedModel fit_model(const Eigen::MatrixXd& features, const Eigen::VectorXd& ta
   if (options.model == ModelKind::linear) {
     fitted.model = linear_fit ? *linear_fit : fit_least_squares(features, target, linear_regressors(terms.size()));
   } else if (options.model == ModelKind::stepwise) {
+    StepwiseOptions stepwise_options;
+    stepwise_options.stop = options.stop;
     auto stepwise = fit_stepwise(features, target,
                                  options.partially_linear ? linear_regressors(terms.size())
                                                           : quadratic_regressors(terms.size()),
-                                 terms);
+                                 terms, stepwise_options);
     for (const auto& step : stepwise.path) fitted.fit.stepwise_path.push_back({step.action, step.regressor, step.f_statistic});
     fitted.model = std::move(stepwise.model);
   } else if (options.model == ModelKind::svr) {

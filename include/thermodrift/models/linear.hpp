@@ -10,6 +10,8 @@
 
 #include <Eigen/Dense>
 
+#include "thermodrift/stop_token.hpp"
+
 namespace thermodrift {
 
 // A regressor is a product of powers of the pipeline's terms: "dT", "dT^2", "dT*rate".
@@ -62,6 +64,7 @@ struct StepwiseOptions {
   double f_to_enter = 4.0;   // partial F a candidate needs to enter (Efroymson's classical value)
   double f_to_remove = 3.9;  // partial F below which an included regressor leaves; < f_to_enter avoids cycling
   std::size_t max_steps = 50;  // bound on add/remove steps
+  StopToken stop;              // asked before every candidate's fit (Interrupted)
 };
 
 struct StepwiseStep {
