@@ -355,8 +355,9 @@ class DriftModel:
         return out
 
     def drift(self, data, gyro=None, temp=None, time=None, rate=None):
-        """The predicted drift (°/h) of every row, one column per axis (causal, as the
-        compensator runs it; rows still in a warm-up carry the estimate there is)."""
+        """The predicted drift (°/h) of every row at that row's time, one column per axis
+        (causal, as the compensator runs it: the model's smoothed drift advanced half the
+        window along its slope; rows still in a warm-up carry the estimate there is)."""
         drift, _, _ = self._run(data, gyro, temp, time, rate)
         return pd.DataFrame(drift, columns=self._core.axes, index=data.index)
 
