@@ -179,6 +179,11 @@ LinearModel LinearModel::from_json(const nlohmann::json& json,
 
 namespace {
 
+// A scaled column whose pivot falls below this is collinear with those before it.
+constexpr double kRankThreshold = 1e-10;
+// Stepwise F statistics this close (relative) are a tie.
+constexpr double kTie = 1e-9;
+
 Eigen::MatrixXd design_matrix(const Eigen::MatrixXd& features, const std::vector<Regressor>& regressors) {
   Eigen::MatrixXd design(features.rows(), static_cast<Eigen::Index>(regressors.size()) + 1);
   std::vector<double> row(static_cast<std::size_t>(features.cols()));
@@ -205,7 +210,7 @@ LinearModel fit_least_squares(const Eigen::MatrixXd& features, const Eigen::Vect
   const Eigen::VectorXd scale = design.colwise().norm().transpose().cwiseMax(1e-300);
   const Eigen::MatrixXd scaled = design * scale.cwiseInverse().asDiagonal();
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(scaled);
-  qr.setThreshold(1e-10);
+  qr.setThreshold(kRankThreshold);
   // Basic solution on the first rank() pivots, the rest left at 0. Eigen's qr.solve()
   // would not do: it keeps every pivot above machine epsilon (setThreshold affects
   // rank(), not solve()), so two collinear columns got huge cancelling coefficients.
@@ -234,6 +239,41 @@ double residual_sum_of_squares(const Eigen::MatrixXd& features, const Eigen::Vec
   const LinearModel model = fit_least_squares(features, target, regressors);
   return (target - model.predict(features)).squaredNorm();
 }
+
+// A least-squares fit seen from a candidate regressor: an orthonormal basis of its design
+// (the columns fit_least_squares keeps, by the same scaled, pivoted QR and threshold) and
+// its residual. With a column c added, the residual sum of squares falls by
+// (c⊥·r)² / |c⊥|², c⊥ = c less its projection on the basis: one candidate costs
+// rows × rank instead of a whole fit.
+class Projection {
+ public:
+  Projection(const Eigen::MatrixXd& features, const Eigen::VectorXd& target, const std::vector<Regressor>& regressors) {
+    const Eigen::MatrixXd design = design_matrix(features, regressors);
+    const Eigen::VectorXd scale = design.colwise().norm().transpose().cwiseMax(1e-300);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design * scale.cwiseInverse().asDiagonal());
+    qr.setThreshold(kRankThreshold);
+    const Eigen::Index rank = qr.rank();
+    basis_ = Eigen::MatrixXd::Identity(design.rows(), rank);
+    basis_.applyOnTheLeft(qr.householderQ().setLength(rank));
+    residual_ = target - basis_ * (basis_.transpose() * target);
+  }
+
+  double rss() const { return residual_.squaredNorm(); }
+
+  // The residual sum of squares with `column` added; rss() when it adds no direction the
+  // fit's rank test would keep.
+  double rss_with(const Eigen::VectorXd& column) const {
+    const Eigen::VectorXd orthogonal = column - basis_ * (basis_.transpose() * column);
+    const double length = orthogonal.norm();
+    if (!(length > kRankThreshold * column.norm())) return rss();
+    const double along = orthogonal.dot(residual_) / length;
+    return std::max(0.0, rss() - along * along);
+  }
+
+ private:
+  Eigen::MatrixXd basis_;     // rows × rank, orthonormal
+  Eigen::VectorXd residual_;
+};
 
 }  // namespace
 
@@ -271,7 +311,8 @@ StepwiseFit fit_stepwise(const Eigen::MatrixXd& features, const Eigen::VectorXd&
   StepwiseFit fit;
   for (std::size_t step = 0; step < options.max_steps; ++step) {
     const auto current = chosen(-1);
-    const double rss = residual_sum_of_squares(features, target, current);
+    const Projection fit_now(features, target, current);
+    const double rss = fit_now.rss();
     const double p = static_cast<double>(current.size());
 
     // Forward: the candidate with the largest partial F = (RSS - RSS+) / (RSS+ / (n - p - 2)).
@@ -280,9 +321,11 @@ StepwiseFit fit_stepwise(const Eigen::MatrixXd& features, const Eigen::VectorXd&
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       if (included[k] || n - p - 2 <= 0) continue;
       options.stop.throw_if_requested("stepwise regression");
-      const double rss_plus = residual_sum_of_squares(features, target, chosen(static_cast<std::ptrdiff_t>(k)));
+      const double rss_plus = fit_now.rss_with(design_matrix(features, {candidates[k]}).col(1));
       const double f = rss_plus > 0 ? (rss - rss_plus) / (rss_plus / (n - p - 2)) : INFINITY;
-      if (f > best_f) {
+      // Ties (to rounding) go to the earlier candidate: two regressors that span the same
+      // column space with the current set give the same F, and rounding must not choose.
+      if (f > best_f * (1.0 + kTie)) {
         best_f = f;
         best = static_cast<std::ptrdiff_t>(k);
       }
@@ -305,7 +348,7 @@ StepwiseFit fit_stepwise(const Eigen::MatrixXd& features, const Eigen::VectorXd&
       options.stop.throw_if_requested("stepwise regression");
       const double rss_minus = residual_sum_of_squares(features, target, chosen(static_cast<std::ptrdiff_t>(k)));
       const double f = rss_now > 0 ? (rss_minus - rss_now) / (rss_now / (n - p_now - 1)) : INFINITY;
-      if (f < worst_f) {
+      if (f < worst_f * (1.0 - kTie)) {
         worst_f = f;
         worst = static_cast<std::ptrdiff_t>(k);
       }

@@ -205,6 +205,59 @@ TEST(FitStepwise, PicksDeltaTAndItsSquareOnly) {
   EXPECT_EQ(runs, 3);
 }
 
+// Each step's partial F, computed from the current fit's basis, is the F of refitting with
+// the candidate added: checked against two least-squares fits at every "add".
+TEST(FitStepwise, EachAddedRegressorsFIsThatOfARefit) {
+  const std::vector<std::string> names = {"dT", "rate"};
+  const Problem problem = quadratic_law(400, 14, 0.05);
+  const auto candidates = quadratic_regressors(2);
+  const StepwiseFit fit = fit_stepwise(problem.features, problem.target, candidates, names);
+  std::vector<Regressor> current;
+  const auto rss = [&](const std::vector<Regressor>& regressors) {
+    return (problem.target - fit_least_squares(problem.features, problem.target, regressors).predict(problem.features))
+        .squaredNorm();
+  };
+  std::size_t adds = 0;
+  for (const auto& step : fit.path) {
+    const auto named = std::find_if(candidates.begin(), candidates.end(),
+                                    [&](const Regressor& r) { return r.name(names) == step.regressor; });
+    ASSERT_NE(named, candidates.end()) << step.regressor;
+    if (step.action == "add") {
+      std::vector<Regressor> plus = current;
+      plus.push_back(*named);
+      const double n = 400, p = static_cast<double>(current.size());
+      const double f = (rss(current) - rss(plus)) / (rss(plus) / (n - p - 2));
+      EXPECT_NEAR(step.f_statistic, f, 1e-6 * f) << step.regressor;
+      current = plus;
+      ++adds;
+    } else {
+      std::erase_if(current, [&](const Regressor& r) { return r.name(names) == step.regressor; });
+    }
+  }
+  EXPECT_GE(adds, 2u);
+}
+
+// Two candidates that span the same columns with the current fit give the same F to
+// rounding: the earlier one enters, and the other adds nothing after it.
+TEST(FitStepwise, ATieGoesToTheEarlierCandidate) {
+  Random random(5);
+  const Eigen::Index n = 300;
+  Eigen::MatrixXd features(n, 3);
+  Eigen::VectorXd target(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double x = random.normal(), z = random.normal();
+    features(i, 0) = z;
+    features(i, 1) = 3.0 * x;   // one direction, twice, in other units
+    features(i, 2) = -0.5 * x;
+    target(i) = 2.0 * x + 0.3 * z + 0.01 * random.normal();
+  }
+  const std::vector<std::string> names = {"z", "x", "same_x"};
+  const StepwiseFit fit = fit_stepwise(features, target, linear_regressors(3), names);
+  std::vector<std::string> added;
+  for (const auto& step : fit.path) added.push_back(step.action + " " + step.regressor);
+  EXPECT_EQ(added, (std::vector<std::string>{"add x", "add z"}));
+}
+
 TEST(FitStepwise, PureNoiseSelectsNothingStrong) {
   Random random(21);
   const Eigen::Index n = 300;
