@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "report_parts.hpp"
+#include "thermodrift/compensate/compensator.hpp"
 #include "thermodrift/error.hpp"
 #include "thermodrift/features/moving_average.hpp"
 #include "thermodrift/features/noise_floor.hpp"
@@ -41,6 +42,23 @@ using namespace report_detail;
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// The drift a Compensator of `model` subtracts from every row of `log`, per axis (a log
+// with one temperature column feeds it to every axis, as compensate does).
+std::vector<std::vector<double>> compensator_drift(const DriftModel& model, const ChamberLog& log) {
+  Compensator compensator(model);
+  const std::size_t inputs = model.temperature_inputs();
+  const bool shared = log.temperature.size() == 1;
+  std::vector<std::vector<double>> drift(model.axes.size(), std::vector<double>(log.rows()));
+  std::vector<double> gyro(model.axes.size()), temperatures(inputs);
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    for (std::size_t a = 0; a < gyro.size(); ++a) gyro[a] = log.gyro[a][i];
+    for (std::size_t c = 0; c < inputs; ++c) temperatures[c] = log.temperature[shared ? 0 : c][i];
+    const auto& out = compensator.push(log.time[i], gyro, temperatures);
+    for (std::size_t a = 0; a < gyro.size(); ++a) drift[a][i] = out.drift[a];
+  }
+  return drift;
+}
 
 std::string model_kind_label(const ModelStudy& m, std::size_t axis);
 
@@ -171,6 +189,13 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   // held-out part.
   say("compensating every axis with every model; Allan deviation before and after");
   start = Clock::now();
+  // What each model's compensator subtracts from every row of the log (the drift at the
+  // row's time, compensate/compensator.hpp): the Allan deviation is of the rate it leaves.
+  std::vector<std::vector<std::vector<double>>> subtracted(study.models.size());
+  for (std::size_t m = 0; m < study.models.size(); ++m) {
+    stop.throw_if_requested("compensation and Allan deviation");
+    subtracted[m] = compensator_drift(study.models[m].calibration.model, log);
+  }
   FigureInputs figures;
   figures.log = &log;
   figures.split_time = study.split_time;
@@ -189,7 +214,14 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
       for (auto row : table.row) trace.true_drift.push_back(options.true_drift[a][row]);
     }
     for (const auto& m : study.models) {
-      const Eigen::VectorXd p = m.calibration.model.axes[a].predict(table.features);
+      // On the model's own terms: the chosen features are not the paper's pair (the table
+      // above), and a model predicting from another's columns read past them.
+      const AxisModel& model = m.calibration.model.axes[a];
+      const bool same_terms = model.pipeline.terms == pipeline.terms;
+      const FeatureTable own = same_terms ? FeatureTable{} : feature_table({log}, model.pipeline, a, false);
+      const FeatureTable& rows = same_terms ? table : own;
+      if (rows.row != table.row) throw Error(fmt::format("report: {} is ready on other rows than the paper's pair", m.features));
+      const Eigen::VectorXd p = model.predict(rows.features);
       trace.prediction.emplace_back(p.data(), p.data() + p.size());
     }
     for (const auto& c : cross) {
@@ -206,7 +238,9 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     allan.curves.push_back({"raw output", overlapping_allan_deviation(raw, sample_rate)});
     for (std::size_t m = 0; m < study.models.size(); ++m) {
       std::vector<double> compensated(raw.size());
-      for (std::size_t i = first; i < table.rows(); ++i) compensated[i - first] = raw[i - first] - trace.prediction[m][i];
+      for (std::size_t i = first; i < table.rows(); ++i) {
+        compensated[i - first] = raw[i - first] - subtracted[m][a][table.row[i]];
+      }
       allan.curves.push_back({"minus " + figures.model_labels[m], overlapping_allan_deviation(compensated, sample_rate)});
     }
     figures.allan.push_back(std::move(allan));

@@ -10,6 +10,9 @@
 #include <random>
 #include <regex>
 #include <set>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "../support/temp_dir.hpp"
 #include "thermodrift/error.hpp"
@@ -219,6 +222,64 @@ TEST_F(Report, PageFiguresAndSummaryAgree) {
   {
     SCOPED_TRACE("far from the floor is warned");
     far_from_the_floor_is_warned(result_, html, summary_json);
+  }
+}
+
+// With terms beside the paper's pair, the fit and residual figures showed those models
+// predicting from the pair's two columns, read past their end (values of 1e187). Each
+// model now predicts from its own terms: every value plausible, and the compensated
+// rate's Allan deviation defined for every model.
+TEST(ReportWithOtherTerms, EveryModelIsDrawnFromItsOwnTerms) {
+  TempDir dir;
+  const std::string t = binary();
+  ASSERT_EQ(testing::run_in(dir, t + " simulate --out chamber.csv --cycles 2 --rate 0.05").status, 0);
+  const auto report = testing::run_in(dir, t + " report --data chamber.csv --time time_s --gyro gyro_x,gyro_y,gyro_z"
+                                               " --temp temp_x,temp_y,temp_z --out out --holdout-fraction 0.5"
+                                               " --evaluations 6 --features lag:600,lagrate:600,dT");
+  ASSERT_EQ(report.status, 0) << report.err;
+  const auto summary = nlohmann::json::parse(testing::read_file(dir.file("out/summary.json")));
+  for (const auto& axis : summary["allan_deviation_held_out"]) {
+    ASSERT_EQ(axis["curves"].size(), 7U) << "raw, and three models on each set of terms";
+    for (const auto& curve : axis["curves"]) {
+      for (const auto& point : curve["tau_s_adev_dph"]) {
+        EXPECT_TRUE(point[1].is_number()) << axis["axis"] << " " << curve["label"] << " at " << point[0];
+      }
+    }
+  }
+  // The figure's residuals on the held-out rows (every few rows) have about the held-out
+  // MSE of the table, model by model.
+  if (!gnuplot_installed()) GTEST_SKIP() << "gnuplot is not installed: no figure data to check";
+  const double split_hours = summary["split"]["time_s"].get<double>() / 3600.0;
+  const auto& models = summary["study"]["models"];
+  ASSERT_EQ(models.size(), 6U);
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto& row = summary["tables"]["held_out"]["rows"][a];
+    const std::string name = row["axis"].get<std::string>();
+    const std::string path = dir.file("out/figures/fit_" + name + ".dat");
+    ASSERT_TRUE(std::filesystem::exists(path)) << path;
+    std::vector<double> squares(models.size(), 0.0);
+    std::size_t rows = 0;
+    for (const auto& line : testing::split_lines(testing::read_file(path))) {
+      std::istringstream fields(line);
+      std::vector<double> values;
+      for (double v; fields >> v;) values.push_back(v);
+      if (values.empty() || values[0] < split_hours) continue;
+      ASSERT_EQ(values.size(), 2U + 2U * models.size()) << line;  // time, smoothed, then prediction, residual per model
+      for (std::size_t m = 0; m < models.size(); ++m) squares[m] += values[3 + 2 * m] * values[3 + 2 * m];
+      ++rows;
+    }
+    ASSERT_GT(rows, 50U) << path;
+    for (std::size_t m = 0; m < models.size(); ++m) {
+      double table_mse = NAN;
+      for (const auto& cell : row["models"]) {
+        if (cell["model"] == models[m]["model"] && cell["features"] == models[m]["features"]) {
+          table_mse = cell["mse"].get<double>();
+        }
+      }
+      const double figure_mse = squares[m] / static_cast<double>(rows);
+      EXPECT_NEAR(figure_mse / table_mse, 1.0, 0.3) << name << ": " << models[m]["model"] << " on "
+                                                    << models[m]["features"];
+    }
   }
 }
 
