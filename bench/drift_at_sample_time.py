@@ -1,7 +1,7 @@
 """How far the compensated rate is from the true drift, with a build that advances the
 model's smoothed prediction to the sample's time (--thermodrift) against one that does not
 (--before: a build of a commit before 2026-11-29). Held out: `fit --model linear --features
-auto` on one simulated cycle of a unit, `compensate` of another programme of it (a new
+auto` (or --fit OPTIONS) on one simulated cycle of a unit, `compensate` of another programme of it (a new
 run: other noise, programme seed 303; the default unit: only other noise).
 
 Per axis, over the rows from 1800 s on, centered MSE over the noise floor (the variance of
@@ -44,6 +44,7 @@ def main():
     parser.add_argument('--thermodrift', default='build/bin/thermodrift')
     parser.add_argument('--before', required=True, help='a build without the advance')
     parser.add_argument('--laws', default='0-8', help='law seeds (0: the default unit), e.g. 0-8,9001-9012')
+    parser.add_argument('--fit', default='--model linear --features auto', help="fit's model options")
     parser.add_argument('--json', help='write the table here')
     args = parser.parse_args()
     temps = ['--temp', 'temp_x,temp_y,temp_z']
@@ -55,8 +56,7 @@ def main():
             run([args.thermodrift, 'simulate', *unit, '--cycles', '1', '--seed', '101', '--out', training])
             run([args.thermodrift, 'simulate', *unit, '--cycles', '1', '--seed', '202',
                  *(['--profile-seed', '303'] if law else []), '--out', test])
-            run([args.thermodrift, 'fit', '--data', training, *temps, '--model', 'linear', '--features', 'auto',
-                 '--out', model])
+            run([args.thermodrift, 'fit', '--data', training, *temps, *args.fit.split(), '--out', model])
             compensated = {}
             for name, binary in (('before', args.before), ('now', args.thermodrift)):
                 out = os.path.join(work, f'{name}{law}.csv')
