@@ -43,19 +43,21 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-// The drift a Compensator of `model` subtracts from every row of `log`, per axis (a log
-// with one temperature column feeds it to every axis, as compensate does).
-std::vector<std::vector<double>> compensator_drift(const DriftModel& model, const ChamberLog& log) {
+// The drift a Compensator of `model`, run over the whole of `log`, subtracts from its rows
+// from `first` on, per axis (a log with one temperature column feeds it to every axis, as
+// compensate does).
+std::vector<std::vector<double>> compensator_drift(const DriftModel& model, const ChamberLog& log, std::size_t first) {
   Compensator compensator(model);
   const std::size_t inputs = model.temperature_inputs();
   const bool shared = log.temperature.size() == 1;
-  std::vector<std::vector<double>> drift(model.axes.size(), std::vector<double>(log.rows()));
+  std::vector<std::vector<double>> drift(model.axes.size(), std::vector<double>(log.rows() - std::min(first, log.rows())));
   std::vector<double> gyro(model.axes.size()), temperatures(inputs);
   for (std::size_t i = 0; i < log.rows(); ++i) {
     for (std::size_t a = 0; a < gyro.size(); ++a) gyro[a] = log.gyro[a][i];
     for (std::size_t c = 0; c < inputs; ++c) temperatures[c] = log.temperature[shared ? 0 : c][i];
     const auto& out = compensator.push(log.time[i], gyro, temperatures);
-    for (std::size_t a = 0; a < gyro.size(); ++a) drift[a][i] = out.drift[a];
+    if (i < first) continue;
+    for (std::size_t a = 0; a < gyro.size(); ++a) drift[a][i - first] = out.drift[a];
   }
   return drift;
 }
@@ -189,12 +191,12 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
   // held-out part.
   say("compensating every axis with every model; Allan deviation before and after");
   start = Clock::now();
-  // What each model's compensator subtracts from every row of the log (the drift at the
-  // row's time, compensate/compensator.hpp): the Allan deviation is of the rate it leaves.
+  // What each model's compensator subtracts from the held-out rows (the drift at the row's
+  // time, compensate/compensator.hpp): the Allan deviation is of the rate it leaves.
   std::vector<std::vector<std::vector<double>>> subtracted(study.models.size());
   for (std::size_t m = 0; m < study.models.size(); ++m) {
     stop.throw_if_requested("compensation and Allan deviation");
-    subtracted[m] = compensator_drift(study.models[m].calibration.model, log);
+    subtracted[m] = compensator_drift(study.models[m].calibration.model, log, study.split_row);
   }
   FigureInputs figures;
   figures.log = &log;
@@ -239,7 +241,7 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     for (std::size_t m = 0; m < study.models.size(); ++m) {
       std::vector<double> compensated(raw.size());
       for (std::size_t i = first; i < table.rows(); ++i) {
-        compensated[i - first] = raw[i - first] - subtracted[m][a][table.row[i]];
+        compensated[i - first] = raw[i - first] - subtracted[m][a][table.row[i] - study.split_row];
       }
       allan.curves.push_back({"minus " + figures.model_labels[m], overlapping_allan_deviation(compensated, sample_rate)});
     }
