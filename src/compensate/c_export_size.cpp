@@ -125,6 +125,9 @@ ModelSize model_size(const DriftModel& model, bool single_precision) {
   // Per axis: trailing mean (add, evict, divide), rate (two subtractions, divide, scale),
   // ΔT, and gyro - drift.
   constexpr std::size_t kPipelineFlops = 9;
+  // The drift at the sample's time (drift_at_sample_time in c_export.cpp): the window's lag
+  // (2), the slope's lag of the prediction (10 and an exp) and the advance itself (4).
+  constexpr std::size_t kAdvanceFlops = 16;
   // smooth, span, gap, warm-up (double) and the reference temperature.
   const std::size_t pipeline_bytes = 4 * sizeof(double) + real;
   ModelSize size;
@@ -139,6 +142,10 @@ ModelSize model_size(const DriftModel& model, bool single_precision) {
     // Each channel a grad term reads runs the trailing mean and the rate too.
     const c_export_detail::FactorPlace place{"p", "s", "step", axis_model.pipeline.channels(), single_precision};
     axis.flops_per_sample = kPipelineFlops * (1 + place.channels.size());
+    if (axis_model.pipeline.smooth_seconds > 0) {  // the drift advanced to the sample's time
+      axis.flops_per_sample += kAdvanceFlops;
+      axis.exp_per_sample += 1;
+    }
     for (const auto& term : axis_model.pipeline.terms) {
       for (const auto& factor : term.factors) {
         const auto code = c_export_detail::factor_code(factor, place);
