@@ -36,9 +36,9 @@ class Compensator {
   // q a τ-lag of p stepped exactly for p moving in a straight line between samples (on a
   // ramp q is p τ before, so the slope is the ramp's; unlike a difference of two samples it
   // does not amplify a float header's rounding at a fast sample rate), τ =
-  // kDriftSlopeFraction of the window; p itself at a (re)start. Subtracted from the raw rate it leaves no lag on a
-  // ramp, and the compensated rate, smoothed as fit smoothed, is what evaluate judges
-  // (docs/export.md, "The drift at the sample's time").
+  // kDriftSlopeFraction of the window; p itself at a (re)start. Subtracted from the raw
+  // rate it leaves no lag on a ramp, and the compensated rate, smoothed as fit smoothed, is
+  // what evaluate judges (docs/export.md, "The drift at the sample's time").
   static constexpr double kDriftSlopeFraction = 0.1;
 
   struct Output {
