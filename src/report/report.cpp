@@ -390,7 +390,8 @@ ReportResult write_report(const ChamberLog& log, const LogSpec& spec, const Repo
     }
     const bool searched = model.features == "auto";
     for (const bool is_held_out : {true, false}) {
-      if (const auto line = far_from_floor_warning(is_held_out ? held_out : in_sample, is_held_out, searched, 1)) {
+      if (const auto line = far_from_floor_warning(is_held_out ? held_out : in_sample, is_held_out, searched, 1,
+                                                    "fit --data")) {
         warnings.push_back(fmt::format("{} ({}): {}", to_string(model.model), model.features, *line));
       }
     }

@@ -320,7 +320,7 @@ std::vector<std::string> fit_warnings(const AxisModel& axis, const ResidualMetri
 }
 
 std::optional<std::string> far_from_floor_warning(const std::vector<FloorRatio>& axes, bool held_out, bool searched,
-                                                  std::size_t training_logs) {
+                                                  std::size_t training_logs, const std::string& data_option) {
   std::vector<std::string> names;
   std::vector<std::string> ratios;
   for (const auto& axis : axes) {
@@ -334,7 +334,8 @@ std::optional<std::string> far_from_floor_warning(const std::vector<FloorRatio>&
                                       : (one ? "on its training data it leaves" : "on their training data they leave");
   const std::string remedy = training_logs > 1
                                  ? "a further chamber programme in training, at other rates and over other ranges, helps most"
-                                 : "another chamber programme in training (--data for each) helps most";
+                                 : fmt::format("another chamber programme in training ({} for each) helps most",
+                                               data_option);
   return fmt::format(
       "{}: {} {} × the noise floor estimate: the model does not describe this unit's drift down to the noise, and such models "
       "often miss other programmes by 10 times the floor or more; {}{}",

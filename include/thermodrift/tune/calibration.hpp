@@ -125,9 +125,12 @@ struct FloorRatio {
 // (nothing when none is): `held_out` says the ratio is the expected held-out MSE's (else the
 // in-sample MSE's), `searched` that the terms were chosen (--features auto; else the line
 // names it as a remedy), `training_logs` how many logs the model was fitted on (with more
-// than one, the advice is a further programme at other rates and ranges).
+// than one, the advice is a further programme at other rates and ranges), `data_option`
+// how the caller's user gives fit another log ("--data"; the report, which reads one log,
+// says "fit --data").
 std::optional<std::string> far_from_floor_warning(const std::vector<FloorRatio>& axes, bool held_out, bool searched,
-                                                  std::size_t training_logs);
+                                                  std::size_t training_logs,
+                                                  const std::string& data_option = "--data");
 
 // What an axis' fit expects held out: the CV MSE (°/h)² its choices were scored by
 // (the tuned SVR's CV, else the feature search's least-squares CV) and where it comes from.
