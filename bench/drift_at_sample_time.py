@@ -24,13 +24,7 @@ import tempfile
 import numpy as np
 import pandas as pd
 
-
-def parse_laws(text):
-    laws = []
-    for part in text.split(','):
-        first, _, last = part.partition('-')
-        laws += list(range(int(first), int(last or first) + 1))
-    return laws
+from impulse_response import parse_laws
 
 
 def run(command):

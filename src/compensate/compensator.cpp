@@ -10,7 +10,6 @@ namespace thermodrift {
 
 Compensator::Compensator(DriftModel model)
     : model_(std::move(model)), drift_(model_.axes.size()), trend_(model_.axes.size()), previous_smoothed_(model_.axes.size()),
-      previous_time_(model_.axes.size()),
       compensated_(model_.axes.size()),
       status_(model_.axes.size()) {
   for (const auto& axis : model_.axes) {
@@ -59,7 +58,7 @@ const Compensator::Output& Compensator::push(double time, std::span<const double
     // ramp q is the prediction τ before, whatever the step.
     const double tau = kDriftSlopeFraction * model_.axes[a].pipeline.smooth_seconds;
     if (tau > 0) {
-      const double step = sample.since_start > 0 ? time - previous_time_[a] : 0.0;
+      const double step = sample.step_seconds;
       if (step > 0) {
         const double decay = std::exp(-step / tau);
         trend_[a] = decay * trend_[a] + (1.0 - decay) * smoothed +
@@ -72,7 +71,6 @@ const Compensator::Output& Compensator::push(double time, std::span<const double
       drift_[a] = smoothed;
     }
     previous_smoothed_[a] = smoothed;
-    previous_time_[a] = time;
     compensated_[a] = gyro[a] - drift_[a];
     const auto& envelope = model_.axes[a].envelope;
     // Never a non-finite value flagged valid (absurd inputs can overflow the model).

@@ -208,6 +208,7 @@ const FeatureStream::Sample& FeatureStream::push(double time, double gyro, doubl
   inputs_ = {own.mean - pipeline_->reference_temperature, own.rate, step_seconds, channel_means_, channel_rates_};
   terms_.push(inputs_, features_);
   sample_.since_start = time - start_time_;
+  sample_.step_seconds = step_seconds;
   sample_.ready = sample_.since_start >= pipeline_->warm_up_seconds();
   return sample_;
 }

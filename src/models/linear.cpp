@@ -256,9 +256,10 @@ class Projection {
     basis_ = Eigen::MatrixXd::Identity(design.rows(), rank);
     basis_.applyOnTheLeft(qr.householderQ().setLength(rank));
     residual_ = target - basis_ * (basis_.transpose() * target);
+    rss_ = residual_.squaredNorm();
   }
 
-  double rss() const { return residual_.squaredNorm(); }
+  double rss() const { return rss_; }
 
   // The residual sum of squares with `column` added; rss() when it adds no direction the
   // fit's rank test would keep.
@@ -273,6 +274,7 @@ class Projection {
  private:
   Eigen::MatrixXd basis_;     // rows × rank, orthonormal
   Eigen::VectorXd residual_;
+  double rss_ = 0;
 };
 
 }  // namespace

@@ -66,7 +66,6 @@ class Compensator {
   std::vector<double> drift_;
   std::vector<double> trend_;              // per axis, q: the τ-lag of the model's prediction
   std::vector<double> previous_smoothed_;  // per axis, the prediction at the previous sample
-  std::vector<double> previous_time_;
   std::vector<double> compensated_;
   std::vector<AxisStatus> status_;
   Output output_;

@@ -99,6 +99,7 @@ class FeatureStream {
   struct Sample {
     bool ready = false;           // false during warm-up (after the start or a gap)
     double since_start = 0;       // s since the stream (re)started: lags settle over this
+    double step_seconds = 0;      // s since the previous sample; 0 at a (re)start
     double smoothed_gyro = 0;     // °/h, the drift target
     // s: half the time the smoothing window's samples span, (newest - oldest) / 2. The
     // window's mean of an evenly sampled signal is its value this long before the newest
