@@ -116,6 +116,16 @@ struct Arguments {
   bool without_self_heating = false;
   std::vector<std::size_t> oracle_without;  // regressors the oracle leaves out (sim::law_regressor_names)
   bool oracle_on_drift = false;  // --oracle-target drift: the oracle fits and is judged on the true drift
+  // --oracle-states measured: the oracle's states rebuilt from the thermometers by a Kalman
+  // filter on the law's own network (sim::law_regressors_from_thermometers), not the true ones.
+  bool oracle_measured = false;
+  // --oracle-lookahead S (with measured states): each row's states from the thermometers up
+  // to S seconds later (inf: the whole run), where the filter reads only those up to the row.
+  double oracle_lookahead = 0;
+  // --gyro-delay S (a diagnostic): every log's gyro (and true drift) delayed by S seconds, so a
+  // model predicts the drift S seconds back from the thermometers up to now: what a
+  // compensation of recorded files could gain by looking S seconds ahead.
+  double gyro_delay = 0;
   std::optional<double> rate_span;          // --rate-span of the --features auto methods (fit's default if absent)
   bool other_channels = FeatureSelectionOptions{}.other_channels;  // --node-channel any|own
   double max_cancellation = FeatureSelectionOptions{}.max_cancellation;  // --max-cancellation (thermal node)
@@ -158,7 +168,7 @@ Arguments parse(int argc, char** argv) {
                  "[--methods paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] "
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
-                 "[--oracle-target gyro|drift] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
+                 "[--oracle-target gyro|drift] [--oracle-states true|measured] [--oracle-lookahead S] [--gyro-delay S] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
                  "[--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--chamber-air NOISE:RESOLUTION] [--log-start power-on|running|estimated] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
@@ -204,6 +214,9 @@ Arguments parse(int argc, char** argv) {
       }
     }
     else if (flag == "--oracle-target" && (value == "gyro" || value == "drift")) args.oracle_on_drift = value == "drift";
+    else if (flag == "--oracle-states" && (value == "true" || value == "measured")) args.oracle_measured = value == "measured";
+    else if (flag == "--oracle-lookahead") args.oracle_lookahead = std::stod(value);
+    else if (flag == "--gyro-delay") args.gyro_delay = std::stod(value);
     else if (flag == "--oracle-without") {
       const auto names = sim::law_regressor_names();
       for (const auto& name : split(value)) {
@@ -257,8 +270,18 @@ constexpr const char* kMeasuredAir = "temp_chamber_measured";
 // The unit through a programme; with --chamber-air, the run also holds the chamber air as
 // its sensor reads it (its noise drawn from the run's own noise seed).
 sim::ChamberRun simulate(const sim::UnitLaw& unit, const sim::Setpoint& programme, std::uint64_t noise_seed,
-                         const std::optional<std::pair<double, double>>& chamber_air) {
+                         const std::optional<std::pair<double, double>>& chamber_air, double gyro_delay_s = 0) {
   sim::ChamberRun run = sim::simulate_unit(unit, programme, noise_seed);
+  if (gyro_delay_s > 0) {  // the first rows repeat the first reading
+    const auto delay = static_cast<std::size_t>(std::llround(gyro_delay_s * run.rate_hz));
+    for (const auto& names : {sim::gyro_columns, sim::drift_columns}) {
+      for (const std::string_view name : names) {
+        auto& column = run.columns[static_cast<std::size_t>(
+            std::find(run.column_names.begin(), run.column_names.end(), name) - run.column_names.begin())];
+        for (std::size_t k = column.size(); k-- > 0;) column[k] = column[k >= delay ? k - delay : 0];
+      }
+    }
+  }
   if (chamber_air) {
     sim::StandardNormal normal(sim::derive_seed(noise_seed, 0xa1));
     std::vector<double> measured = run.column("temp_chamber");
@@ -541,31 +564,54 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     if (args.without_self_heating) axis.self_heating_c = 0;
   }
   const bool oracle = std::find(args.methods.begin(), args.methods.end(), Method::oracle) != args.methods.end();
-  auto regressors_of = [&](const sim::Setpoint& programme) {
-    return oracle ? sim::law_regressors(unit, programme) : sim::LawRegressors{};
-  };
   const sim::Setpoint training_programme = sim::draw_profile(sim::ProfileKind::cycle, unit, seed, 2);
-  const sim::ChamberRun training_run = simulate(unit, training_programme, sim::derive_seed(seed, 1), args.chamber_air);
-  const sim::LawRegressors training_regressors = regressors_of(training_programme);
+  const sim::ChamberRun training_run = simulate(unit, training_programme, sim::derive_seed(seed, 1), args.chamber_air, args.gyro_delay);
   const std::size_t second_cycle = training_run.cycle_start_rows().at(1);
+  // The oracle's states: the true ones, or (--oracle-states measured) rebuilt from each run's
+  // thermometers, the air's rate intensity chosen by the likelihood of the training cycle's.
+  double air_rate_intensity = 0;
+  if (oracle && args.oracle_measured) {
+    const sim::ChamberRun cycle = slice(training_run, 0, second_cycle);
+    double best = -std::numeric_limits<double>::infinity();
+    for (double intensity = 1e-12; intensity < 2e-6; intensity *= 10) {
+      const double likelihood = sim::law_regressors_from_thermometers(unit, cycle, intensity).log_likelihood;
+      if (likelihood > best) {
+        best = likelihood;
+        air_rate_intensity = intensity;
+      }
+    }
+    law.air_rate_intensity = air_rate_intensity;
+  }
+  auto regressors_of = [&](const sim::Setpoint& programme, const sim::ChamberRun& run) {
+    if (!oracle) return sim::LawRegressors{};
+    if (args.oracle_measured) {
+      return sim::law_regressors_from_thermometers(unit, run, air_rate_intensity, args.oracle_lookahead).regressors;
+    }
+    return sim::law_regressors(unit, programme);
+  };
+  const sim::LawRegressors training_regressors = regressors_of(training_programme, training_run);
   // --training-noise K: cycle 1 of the same programme with another noise draw (ARW, bias
   // instability, thermometer noise); the next cycle is still judged on the run above.
   const auto training_draw = [&](std::uint64_t draw) {
     if (draw == 0 && args.training_quiet.empty()) return slice(training_run, 0, second_cycle);
     const sim::UnitLaw& drawn = args.training_quiet.empty() ? unit : quiet_unit(unit, args.training_quiet);
-    return slice(simulate(drawn, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw), args.chamber_air),
+    return slice(simulate(drawn, training_programme, sim::derive_seed(sim::derive_seed(seed, 1), draw), args.chamber_air, args.gyro_delay),
                  0, second_cycle);
   };
   const sim::ChamberRun first = training_draw(args.training_noise);
-  const sim::LawRegressors first_regressors = oracle ? slice(training_regressors, 0, second_cycle) : sim::LawRegressors{};
+  const bool first_is_cycle_1 = args.training_noise == 0 && args.training_quiet.empty();
+  const sim::LawRegressors first_regressors =
+      !oracle ? sim::LawRegressors{}
+      : args.oracle_measured && !first_is_cycle_1 ? regressors_of(training_programme, first)
+                                                  : slice(training_regressors, 0, second_cycle);
   std::vector<ChamberLog> training{log_of(first)};
   std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>> oracle_training{{&first, &first_regressors}};
   sim::ChamberRun second_run;
   sim::LawRegressors second_regressors;
   if (args.two_runs) {
     const sim::Setpoint programme = sim::draw_profile(second_training_profile(seed), unit, sim::derive_seed(seed, 14));
-    second_run = simulate(unit, programme, sim::derive_seed(seed, 4), args.chamber_air);
-    second_regressors = regressors_of(programme);
+    second_run = simulate(unit, programme, sim::derive_seed(seed, 4), args.chamber_air, args.gyro_delay);
+    second_regressors = regressors_of(programme, second_run);
     training.push_back(log_of(second_run));
     oracle_training.emplace_back(&second_run, &second_regressors);
   }
@@ -579,8 +625,8 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   std::uint64_t stream = 2;
   for (sim::ProfileKind kind : other_profiles(seed)) {
     const sim::Setpoint programme = sim::draw_profile(kind, unit, sim::derive_seed(seed, 10 + stream));
-    tests.push_back(make_test(sim::to_string(kind), simulate(unit, programme, sim::derive_seed(seed, stream), args.chamber_air)));
-    tests.back().regressors = regressors_of(programme);
+    tests.push_back(make_test(sim::to_string(kind), simulate(unit, programme, sim::derive_seed(seed, stream), args.chamber_air, args.gyro_delay)));
+    tests.back().regressors = regressors_of(programme, tests.back().run);
     ++stream;
   }
   // A diagnostic beside the tests: cycle 2 judged on the same rows with the lags carried

@@ -116,6 +116,7 @@ struct LawResult {
   Cost cost;  // the whole law: simulation, search, fits, evaluation
   double training_s = 0;  // length of the training log(s)
   std::array<double, 3> training_floor{};  // the true noise floor of the (first) training log
+  double air_rate_intensity = 0;  // --oracle-states measured: the filter's, chosen on the training cycle
   std::vector<MethodResult> methods;
 };
 
@@ -336,6 +337,7 @@ inline nlohmann::json laws_json(const std::vector<LawResult>& laws) {
     }
     out.push_back({{"seed", law.seed}, {"tests", law.tests}, {"cpu_s", law.cost.cpu_s}, {"wall_s", law.cost.wall_s},
                    {"training_s", law.training_s}, {"training_floor", law.training_floor},
+                   {"air_rate_intensity", law.air_rate_intensity},
                    {"methods", methods}});
   }
   return out;

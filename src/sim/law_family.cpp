@@ -7,6 +7,9 @@
 #include <numbers>
 #include <random>
 
+#include <Eigen/Dense>
+#include <unsupported/Eigen/MatrixFunctions>
+
 #include "thermodrift/error.hpp"
 #include "thermodrift/sim/standard_normal.hpp"
 #include "sim/readout.hpp"
@@ -420,6 +423,54 @@ class UnitPhysics {
             std::exp(-t / law.turn_on_time_constant_s)};
   }
 
+  // The network's linear part, probed from derivative(): d(state)/dt = jacobian·state +
+  // air_gain·air + drive (the self-heating). Exact on every row but the memories' (a tanh of
+  // the coil's rate), which linear_states() leaves out.
+  void linear_part(Eigen::MatrixXd& jacobian, Eigen::VectorXd& air_gain, Eigen::VectorXd& drive) const {
+    const std::size_t n = state_.size();
+    std::vector<double> x(n, 0.0), dx(n);
+    derivative(x, 0.0, dx);
+    drive = Eigen::Map<const Eigen::VectorXd>(dx.data(), static_cast<Eigen::Index>(n));
+    derivative(x, 1.0, dx);
+    air_gain = Eigen::Map<const Eigen::VectorXd>(dx.data(), static_cast<Eigen::Index>(n)) - drive;
+    jacobian.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+    for (std::size_t j = 0; j < n; ++j) {
+      x[j] = 1.0;
+      derivative(x, 0.0, dx);
+      x[j] = 0.0;
+      jacobian.col(static_cast<Eigen::Index>(j)) =
+          Eigen::Map<const Eigen::VectorXd>(dx.data(), static_cast<Eigen::Index>(n)) - drive;
+    }
+  }
+  std::vector<std::size_t> linear_states() const {
+    std::vector<std::size_t> out;
+    for (std::size_t i = 0; i < state_.size(); ++i) {
+      if (i < sensor_ || (i - sensor_) % 3 != 2) out.push_back(i);
+    }
+    return out;
+  }
+  std::size_t sensor_index(std::size_t a) const { return sensor_ + 3 * a; }
+  // The case, the nodes and the sensors; the rest are the radial gradients and memories.
+  bool is_temperature(std::size_t i) const { return i < sensor_ || (i - sensor_) % 3 == 0; }
+
+  // Sets the network's linear states (linear_states() order) to an estimate, and advances
+  // the memories and plays over dt on it, the coil's rate held: what the law's nonlinear
+  // states would be were the estimate the truth.
+  void follow(const std::vector<std::size_t>& linear, const Eigen::VectorXd& estimate, double air_c, double dt) {
+    for (std::size_t i = 0; i < linear.size(); ++i) state_[linear[i]] = estimate[static_cast<Eigen::Index>(i)];
+    std::vector<double> rate(state_.size());
+    derivative(state_, air_c, rate);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const AxisLaw& law = unit_.axes[a];
+      const double coil = state_[coil_index(a)];
+      if (law.hysteresis == HysteresisKind::play) {
+        play_[a] = std::clamp(play_[a], coil - law.hysteresis_width_c, coil + law.hysteresis_width_c);
+      }
+      const double target = std::tanh(rate[coil_index(a)] * 60.0 / law.hysteresis_rate_scale);
+      state_[memory(a)] = target + (state_[memory(a)] - target) * std::exp(-dt / law.hysteresis_time_constant_s);
+    }
+  }
+
   // True drift (°/h) of axis a: the law's coefficients on its regressors.
   double drift_dph(std::size_t a, double t, double air_c) const {
     const auto x = regressors(a, t, air_c);
@@ -616,6 +667,137 @@ LawRegressors law_regressors(const UnitLaw& unit, const Setpoint& setpoint, doub
       for (std::size_t j = 0; j < kLawRegressors; ++j) out[a][j][k] = x[j];
     }
     physics.step(t, dt, setpoint);
+  }
+  return out;
+}
+
+RebuiltRegressors law_regressors_from_thermometers(const UnitLaw& unit, const ChamberRun& run,
+                                                  double air_rate_intensity, double lookahead_s, const StopToken& stop) {
+  const std::size_t rows = run.rows();
+  if (rows == 0) throw UsageError("no rows to rebuild the law's states from");
+  const double dt = 1.0 / run.rate_hz;
+  const std::vector<double>& time = run.column(time_column);
+  std::array<const std::vector<double>*, 3> thermometers{};
+  for (std::size_t a = 0; a < 3; ++a) thermometers[a] = &run.column(temperature_columns[a]);
+
+  UnitPhysics physics(unit, (*thermometers[0])[0]);
+  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd air_gain, drive;
+  physics.linear_part(jacobian, air_gain, drive);
+  const std::vector<std::size_t> linear = physics.linear_states();
+  // The filter's state: the air, its rate (a random walk of intensity q), the network's
+  // linear states; its continuous model F·s + d, discretized exactly over dt with a
+  // constant appended (the drive), its noise by Van Loan's method.
+  const auto m = static_cast<Eigen::Index>(linear.size() + 2);
+  Eigen::MatrixXd f = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(m);
+  f(0, 1) = 1.0;
+  for (Eigen::Index i = 0; i + 2 < m; ++i) {
+    const auto li = static_cast<Eigen::Index>(linear[static_cast<std::size_t>(i)]);
+    f(i + 2, 0) = air_gain[li];
+    d[i + 2] = drive[li];
+    for (Eigen::Index j = 0; j + 2 < m; ++j) {
+      f(i + 2, j + 2) = jacobian(li, static_cast<Eigen::Index>(linear[static_cast<std::size_t>(j)]));
+    }
+  }
+  Eigen::MatrixXd augmented = Eigen::MatrixXd::Zero(m + 1, m + 1);
+  augmented.topLeftCorner(m, m) = f * dt;
+  augmented.topRightCorner(m, 1) = d * dt;
+  const Eigen::MatrixXd step = augmented.exp();
+  const Eigen::MatrixXd phi = step.topLeftCorner(m, m);
+  const Eigen::VectorXd offset = step.topRightCorner(m, 1);
+  Eigen::MatrixXd van_loan = Eigen::MatrixXd::Zero(2 * m, 2 * m);
+  van_loan.topLeftCorner(m, m) = -f * dt;
+  van_loan(1, m + 1) = air_rate_intensity * dt;
+  van_loan.bottomRightCorner(m, m) = f.transpose() * dt;
+  const Eigen::MatrixXd vl = van_loan.exp();
+  Eigen::MatrixXd q = vl.bottomRightCorner(m, m).transpose() * vl.topRightCorner(m, m);
+  q = 0.5 * (q + q.transpose());
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(3, m);
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto found = std::find(linear.begin(), linear.end(), physics.sensor_index(a));
+    h(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(found - linear.begin()) + 2) = 1.0;
+  }
+  const double resolution = unit.noise.temperature_resolution_c;
+  const Eigen::MatrixXd r = Eigen::MatrixXd::Identity(3, 3) *
+                            (unit.noise.temperature_noise_c * unit.noise.temperature_noise_c + resolution * resolution / 12);
+
+  // Switched on in equilibrium: every temperature the same, not known; no rates.
+  const double start = ((*thermometers[0])[0] + (*thermometers[1])[0] + (*thermometers[2])[0]) / 3;
+  Eigen::VectorXd s = Eigen::VectorXd::Zero(m);
+  Eigen::MatrixXd p = Eigen::MatrixXd::Identity(m, m) * 1e-6;
+  Eigen::VectorXd common = Eigen::VectorXd::Zero(m);
+  s[0] = start;
+  common[0] = 1;
+  for (Eigen::Index i = 2; i < m; ++i) {
+    if (physics.is_temperature(linear[static_cast<std::size_t>(i - 2)])) {  // radial gradients start at 0
+      s[i] = start;
+      common[i] = 1;
+    }
+  }
+  p += common * common.transpose();
+  p(1, 1) += 1.0 / 3600.0;  // (1 °C/min)²
+
+  RebuiltRegressors out;
+  for (auto& axis : out.regressors) axis.assign(kLawRegressors, std::vector<double>(rows));
+  const auto evaluate_row = [&](std::size_t k, const Eigen::VectorXd& estimate) {
+    physics.follow(linear, estimate.tail(m - 2), estimate[0], k > 0 ? dt : 0.0);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto x = physics.regressors(a, time[k], estimate[0]);
+      for (std::size_t j = 0; j < kLawRegressors; ++j) out.regressors[a][j][k] = x[j];
+    }
+  };
+  // With a look-ahead, each row's filtered estimate and Rauch-Tung-Striebel gain are kept
+  // for the passes backwards.
+  const std::size_t ahead =
+      std::isinf(lookahead_s) ? rows : static_cast<std::size_t>(std::llround(lookahead_s * run.rate_hz));
+  std::vector<Eigen::VectorXd> filtered;
+  std::vector<Eigen::MatrixXd> gains;
+  Eigen::Vector3d y;
+  for (std::size_t k = 0; k < rows; ++k) {
+    if (k % 4096 == 0) stop.throw_if_requested("rebuilding the law's states");
+    if (k > 0) {
+      s = phi * s + offset;
+      const Eigen::MatrixXd predicted = phi * p * phi.transpose() + q;
+      if (ahead > 0) {
+        // The process noise drives only the air's rate, so a predicted covariance is close
+        // to singular (states tied to each other by the network): a least-squares solve.
+        gains.push_back(predicted.completeOrthogonalDecomposition().solve(phi * p).transpose());
+      }
+      p = predicted;
+    }
+    for (std::size_t a = 0; a < 3; ++a) y[static_cast<Eigen::Index>(a)] = (*thermometers[a])[k];
+    const Eigen::Vector3d innovation = y - h * s;
+    const Eigen::Matrix3d covariance = h * p * h.transpose() + r;
+    const Eigen::LLT<Eigen::Matrix3d> llt(covariance);
+    const Eigen::MatrixXd gain = llt.solve(h * p).transpose();
+    s += gain * innovation;
+    // Joseph's form: stays positive definite where the air's rate hardly moves.
+    const Eigen::MatrixXd keep = Eigen::MatrixXd::Identity(m, m) - gain * h;
+    p = keep * p * keep.transpose() + gain * r * gain.transpose();
+    p = 0.5 * (p + p.transpose());
+    const Eigen::Matrix3d l = llt.matrixL();
+    out.log_likelihood -= 0.5 * (innovation.dot(llt.solve(innovation)) +
+                                 2 * l.diagonal().array().log().sum() + 3 * std::log(2 * std::numbers::pi));
+    if (ahead > 0) filtered.push_back(s);
+    else evaluate_row(k, s);
+  }
+  if (ahead >= rows) {  // every row: one pass backwards
+    for (std::size_t k = rows - 1; k-- > 0;) {
+      filtered[k] += gains[k] * (filtered[k + 1] - (phi * filtered[k] + offset));
+    }
+    for (std::size_t k = 0; k < rows; ++k) evaluate_row(k, filtered[k]);
+  } else if (ahead > 0) {  // row k from rows up to k + ahead: a pass back from there for each
+    for (std::size_t k = 0; k < rows; ++k) {
+      if (k % 4096 == 0) stop.throw_if_requested("rebuilding the law's states");
+      std::size_t j = std::min(k + ahead, rows - 1);
+      Eigen::VectorXd estimate = filtered[j];
+      while (j > k) {
+        --j;
+        estimate = filtered[j] + gains[j] * (estimate - (phi * filtered[j] + offset));
+      }
+      evaluate_row(k, estimate);
+    }
   }
   return out;
 }

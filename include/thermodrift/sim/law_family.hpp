@@ -136,4 +136,23 @@ std::array<double, kLawRegressors> law_coefficients(const AxisLaw& law);
 using LawRegressors = std::array<std::vector<std::vector<double>>, 3>;  // [axis][regressor][row]
 LawRegressors law_regressors(const UnitLaw& unit, const Setpoint& setpoint, double rate_hz = 1.0);
 
+// The same regressors rebuilt from what the run's log measures: the unit's linear thermal
+// states (case, nodes, sensors, radial gradients) estimated from its three thermometers by
+// a Kalman filter on the unit's own network, the chamber air modelled as a ramp whose rate
+// is a random walk of intensity `air_rate_intensity` ((°C/s)²/s); the memories, plays and
+// static map evaluated on the estimates. Causal: row k reads thermometer rows 0..k. Only the
+// thermometers are read (not the air), the structure and every constant are the law's: a
+// bound for identifications, which must rebuild the states from the same readings
+// (generalization_bench --oracle-states measured). With `lookahead_s` > 0, row k reads the
+// rows up to lookahead_s later too (a fixed-lag Rauch-Tung-Striebel smoother; infinity:
+// every row): what a method could reach that waited that long.
+// `log_likelihood` is the thermometers' under the filter, to choose the intensity by.
+struct RebuiltRegressors {
+  LawRegressors regressors;
+  double log_likelihood = 0;
+};
+RebuiltRegressors law_regressors_from_thermometers(const UnitLaw& unit, const ChamberRun& run,
+                                                  double air_rate_intensity, double lookahead_s = 0,
+                                                  const StopToken& stop = {});
+
 }  // namespace thermodrift::sim
