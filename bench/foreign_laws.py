@@ -289,44 +289,15 @@ def network(unit):
     return A, b, c
 
 
-def simulate(unit, profile, noise_seed, rate_hz=1.0, regressors=None, internal=None):
-    """Columns of a 1 Hz log: time, the three thermometers, gyros, and the true drift.
-
-    regressors: a list that receives, per axis, a dict of the drift law's terms (each the
-    noise-free part of the drift it contributes, before smoothing): the oracle's columns.
-    internal: a list that receives, per axis, a dict of the coil's mean temperature and its
-    rate (°C/min) and the radial gradient."""
-    times, temps, cycle_starts = profile
-    dt = 1.0 / rate_hz
-    t = np.arange(0.0, times[-1], dt)
-    air = np.interp(t, times, temps)
+def law_terms(unit, t, states, air, internal=None):
+    """Per axis, a dict of the drift law's terms (each the part of the drift it contributes)
+    evaluated on the network's states row by row (true or estimated) with the air at `air`;
+    internal: as in simulate."""
     A, b, c = network(unit)
-    n = A.shape[0]
-    # Exact discretization for an input linear over each step (first-order hold).
-    big = np.zeros((n + 2, n + 2))
-    big[:n, :n] = A * dt
-    big[:n, n] = b * dt
-    big[n, n + 1] = 1.0
-    e = expm(big)
-    phi, gamma0, gamma1 = e[:n, :n], e[:n, n], e[:n, n + 1]
-    heat = np.linalg.solve(A, (phi - np.eye(n)) @ c)  # the constant source over one step
-    x = np.full(n, air[0])
-    states = np.empty((len(t), n))
-    for k in range(len(t)):
-        states[k] = x
-        if k + 1 < len(t):
-            x = phi @ x + gamma0 * air[k] + gamma1 * (air[k + 1] - air[k]) + heat
+    dt = t[1] - t[0] if len(t) > 1 else 1.0
     derivative = states @ A.T + np.outer(air, b) + c  # °C/s, exact at each sample
-
-    rng = rng_for(noise_seed, 99)
-    noise = unit["noise"]
-    columns = {"time_s": t}
-    drifts = []
+    out = []
     for a, axis in enumerate(unit["axes"]):
-        s = 2 + 3 * SHELLS + a
-        reading = states[:, s] + rng.normal(0, noise["temperature_noise"], len(t))
-        res = noise["temperature_resolution"]
-        columns[f"temp_{AXES[a]}"] = np.round(reading / res) * res
         first = 2 + a * SHELLS
         shells = states[:, first:first + SHELLS]
         shell_rates = derivative[:, first:first + SHELLS] * 60.0
@@ -373,11 +344,55 @@ def simulate(unit, profile, noise_seed, rate_hz=1.0, regressors=None, internal=N
                 relay[k] = h
             terms["relay"] = hyst["size"] * relay
         terms["turn_on"] = axis["turn_on"] * np.exp(-t / axis["turn_on_tau"])
-        drifts.append(sum(terms.values()))
-        if regressors is not None:
-            regressors.append(terms)
+        out.append(terms)
         if internal is not None:
             internal.append({"coil": coil, "coil_rate": coil_rate, "gradient": gradient})
+    return out
+
+
+def simulate(unit, profile, noise_seed, rate_hz=1.0, regressors=None, internal=None, states_out=None):
+    """Columns of a 1 Hz log: time, the three thermometers, gyros, and the true drift.
+
+    regressors: a list that receives, per axis, a dict of the drift law's terms (each the
+    noise-free part of the drift it contributes, before smoothing): the oracle's columns.
+    internal: a list that receives, per axis, a dict of the coil's mean temperature and its
+    rate (°C/min) and the radial gradient. states_out: a dict that receives the network's
+    states row by row ("states") and the air ("air")."""
+    times, temps, cycle_starts = profile
+    dt = 1.0 / rate_hz
+    t = np.arange(0.0, times[-1], dt)
+    air = np.interp(t, times, temps)
+    A, b, c = network(unit)
+    n = A.shape[0]
+    # Exact discretization for an input linear over each step (first-order hold).
+    big = np.zeros((n + 2, n + 2))
+    big[:n, :n] = A * dt
+    big[:n, n] = b * dt
+    big[n, n + 1] = 1.0
+    e = expm(big)
+    phi, gamma0, gamma1 = e[:n, :n], e[:n, n], e[:n, n + 1]
+    heat = np.linalg.solve(A, (phi - np.eye(n)) @ c)  # the constant source over one step
+    x = np.full(n, air[0])
+    states = np.empty((len(t), n))
+    for k in range(len(t)):
+        states[k] = x
+        if k + 1 < len(t):
+            x = phi @ x + gamma0 * air[k] + gamma1 * (air[k + 1] - air[k]) + heat
+    if states_out is not None:
+        states_out.update(states=states, air=air)
+
+    rng = rng_for(noise_seed, 99)
+    noise = unit["noise"]
+    columns = {"time_s": t}
+    for a in range(3):
+        s = 2 + 3 * SHELLS + a
+        reading = states[:, s] + rng.normal(0, noise["temperature_noise"], len(t))
+        res = noise["temperature_resolution"]
+        columns[f"temp_{AXES[a]}"] = np.round(reading / res) * res
+    terms_per_axis = law_terms(unit, t, states, air, internal)
+    drifts = [sum(terms.values()) for terms in terms_per_axis]
+    if regressors is not None:
+        regressors.extend(terms_per_axis)
 
     # Gyro noise: white (ARW), a flicker-like bias from five Gauss-Markov processes, quantization.
     sigma_w = noise["arw"] * 60.0 * math.sqrt(rate_hz)
