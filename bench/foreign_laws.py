@@ -425,14 +425,20 @@ def lfilter_ar1(drive, phi):
     return lfilter([1.0], [1.0, -phi], drive)
 
 
+def trailing_mean(column, window):
+    """The trailing mean over `window` rows (of a column, or of each column of a matrix),
+    from the first full window on: row k of the result is row k + window - 1 of the input."""
+    column = np.asarray(column, dtype=float)
+    csum = np.concatenate([np.zeros((1,) + column.shape[1:]), np.cumsum(column, axis=0)])
+    return (csum[window:] - csum[:-window]) / window
+
+
 def noise_floor(columns, first_row, window_s=100.0, rate_hz=1.0):
     """Per axis: the variance, about its mean, of the gyro noise after a trailing mean of window_s, from first_row on."""
     w = int(round(window_s * rate_hz))
     floors = []
     for a in AXES:
-        noise = columns[f"gyro_{a}"] - columns[f"drift_{a}"]
-        csum = np.concatenate([[0.0], np.cumsum(noise)])
-        mean = (csum[w:] - csum[:-w]) / w  # row k + w - 1
+        mean = trailing_mean(columns[f"gyro_{a}"] - columns[f"drift_{a}"], w)
         rows = mean[max(first_row - (w - 1), 0):]
         floors.append(float(np.var(rows)))
     return floors

@@ -41,9 +41,7 @@ INTENSITIES = [1e-12, 1e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6]  # (°C/s)²/s
 
 def trailing_mean(column):
     """The 100 s trailing mean from the first full window on (row WINDOW - 1 is row 0)."""
-    column = np.asarray(column, dtype=float)
-    csum = np.concatenate([np.zeros((1,) + column.shape[1:]), np.cumsum(column, axis=0)])
-    return (csum[WINDOW:] - csum[:-WINDOW]) / WINDOW
+    return fl.trailing_mean(column, WINDOW)
 
 
 class Filter:
@@ -174,6 +172,9 @@ def law(seed, state_kinds, intensities=INTENSITIES):
         judged = [("next cycle", "train", second, len(columns["time_s"]))]
         judged += [(name, name, 0, len(cols["time_s"])) for name, cols, _ in runs[1:]]
         all_columns = {name: cols for name, cols, _ in runs}
+        floors = {name: fl.noise_floor(fl.rows(all_columns[source], begin, end), int(fb.SETTLE_S))
+                  for name, source, begin, end in judged}
+        first = int(fb.SETTLE_S) - (WINDOW - 1)  # the first judged row of the 100 s means
         for a in range(3):
             gyro = trailing_mean(columns[f"gyro_{fl.AXES[a]}"][:second])
             x = trailing_mean(designs["train"][a][:second])
@@ -184,10 +185,8 @@ def law(seed, state_kinds, intensities=INTENSITIES):
                 cols = all_columns[source]
                 y = trailing_mean(cols[f"gyro_{fl.AXES[a]}"][begin:end])
                 prediction = trailing_mean(designs[source][a][begin:end]) @ beta
-                first = int(fb.SETTLE_S) - (WINDOW - 1)
                 mse = float(np.mean((y[first:] - prediction[first:]) ** 2))
-                floor = fl.noise_floor(fl.rows(cols, begin, end), int(fb.SETTLE_S))[a]
-                tests.setdefault(name, [None] * 3)[a] = mse / floor
+                tests.setdefault(name, [None] * 3)[a] = mse / floors[name][a]
         result["states"][kind] = tests
     return result
 

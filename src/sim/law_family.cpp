@@ -782,10 +782,12 @@ RebuiltRegressors law_regressors_from_thermometers(const UnitLaw& unit, const Ch
     if (ahead > 0) filtered.push_back(s);
     else evaluate_row(k, s);
   }
+  // Row j's estimate from the rows after it, given row j + 1's from the same rows.
+  const auto back = [&](std::size_t j, const Eigen::VectorXd& later) -> Eigen::VectorXd {
+    return filtered[j] + gains[j] * (later - (phi * filtered[j] + offset));
+  };
   if (ahead >= rows) {  // every row: one pass backwards
-    for (std::size_t k = rows - 1; k-- > 0;) {
-      filtered[k] += gains[k] * (filtered[k + 1] - (phi * filtered[k] + offset));
-    }
+    for (std::size_t k = rows - 1; k-- > 0;) filtered[k] = back(k, filtered[k + 1]);
     for (std::size_t k = 0; k < rows; ++k) evaluate_row(k, filtered[k]);
   } else if (ahead > 0) {  // row k from rows up to k + ahead: a pass back from there for each
     for (std::size_t k = 0; k < rows; ++k) {
@@ -794,7 +796,7 @@ RebuiltRegressors law_regressors_from_thermometers(const UnitLaw& unit, const Ch
       Eigen::VectorXd estimate = filtered[j];
       while (j > k) {
         --j;
-        estimate = filtered[j] + gains[j] * (estimate - (phi * filtered[j] + offset));
+        estimate = back(j, estimate);
       }
       evaluate_row(k, estimate);
     }
