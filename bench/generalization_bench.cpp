@@ -8,6 +8,8 @@
 //                                  [--folds-by time|runs] [--sensor drawn|coil]
 //                                  [--without turn-on,self-heating]
 //                                  [--oracle-without NAME,...] [--oracle-target gyro|drift]
+//                                  [--oracle-states true|measured] [--oracle-lookahead S]
+//                                  [--oracle-constants law|cv|cv-pooled|fit] [--gyro-delay S]
 //                                  [--rate-span S] [--node-channel own|any]
 //                                  [--max-cancellation X] [--node-under-dynamics on|off]
 //                                  [--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K]
@@ -36,7 +38,9 @@
 // --oracle-without: how far one law's aliases are from it); --training-quiet bias|gyro|all
 // trains on the cycle simulated again without the bias instability or any noise. The JSON
 // gives every test's `distance`, the MSE against the smoothed true drift over the floor,
-// and every axis' `training_distance`, the same on the training rows.
+// and every axis' `training_distance`, the same on the training rows. --oracle-states
+// measured rebuilds the oracle's states from the thermometers; --oracle-constants chooses
+// its constants from the training log (choose_constants).
 // docs/generalization.md says what the methods are and
 // has measured figures.
 #include <time.h>
@@ -97,6 +101,10 @@ struct Stopwatch {
   }
 };
 
+// What the constants are chosen by: the searches' score (the geometric mean of the blocks'
+// MSEs), the pooled blocked-CV MSE, or the in-sample fit (a prediction-error fit).
+enum class ConstantsScore { typical_block, pooled, in_sample };
+
 struct Arguments {
   std::string seed_list = "acceptance";
   std::vector<std::uint64_t> seeds;
@@ -122,6 +130,10 @@ struct Arguments {
   // --oracle-lookahead S (with measured states): each row's states from the thermometers up
   // to S seconds later (inf: the whole run), where the filter reads only those up to the row.
   double oracle_lookahead = 0;
+  // --oracle-constants law|cv|cv-pooled|fit: the law's own constants, or each axis' chosen
+  // from the training log, starting at the law's (choose_constants).
+  bool oracle_cv_constants = false;
+  ConstantsScore oracle_constants_score = ConstantsScore::typical_block;
   // --gyro-delay S (a diagnostic): every log's gyro (and true drift) delayed by S seconds, so a
   // model predicts the drift S seconds back from the thermometers up to now: what a
   // compensation of recorded files could gain by looking S seconds ahead.
@@ -168,7 +180,7 @@ Arguments parse(int argc, char** argv) {
                  "[--methods paper,linear,stepwise,svr,oracle] [--threads N] [--evaluations N] "
                  "[--identify greedy|thermal-node] [--training cycle|two-runs] [--folds-by time|runs] "
                  "[--sensor drawn|coil] [--without turn-on,self-heating] [--oracle-without NAME,...] "
-                 "[--oracle-target gyro|drift] [--oracle-states true|measured] [--oracle-lookahead S] [--gyro-delay S] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
+                 "[--oracle-target gyro|drift] [--oracle-states true|measured] [--oracle-lookahead S] [--oracle-constants law|cv|cv-pooled|fit] [--gyro-delay S] [--rate-span S] [--node-channel own|any] [--max-cancellation X] [--node-under-dynamics on|off] "
                  "[--cv-score geometric|pooled] [--min-gain X] [--search-folds N] [--training-noise K] [--bag B] [--training-quiet bias|gyro|all] [--chamber-air NOISE:RESOLUTION] [--log-start power-on|running|estimated] [--json FILE]\n",
                  argv[0]);
       std::exit(2);
@@ -216,6 +228,12 @@ Arguments parse(int argc, char** argv) {
     else if (flag == "--oracle-target" && (value == "gyro" || value == "drift")) args.oracle_on_drift = value == "drift";
     else if (flag == "--oracle-states" && (value == "true" || value == "measured")) args.oracle_measured = value == "measured";
     else if (flag == "--oracle-lookahead") args.oracle_lookahead = std::stod(value);
+    else if (flag == "--oracle-constants" && (value == "law" || value == "cv" || value == "cv-pooled" || value == "fit")) {
+      args.oracle_cv_constants = value != "law";
+      args.oracle_constants_score = value == "cv"          ? ConstantsScore::typical_block
+                                    : value == "cv-pooled" ? ConstantsScore::pooled
+                                                           : ConstantsScore::in_sample;
+    }
     else if (flag == "--gyro-delay") args.gyro_delay = std::stod(value);
     else if (flag == "--oracle-without") {
       const auto names = sim::law_regressor_names();
@@ -232,6 +250,9 @@ Arguments parse(int argc, char** argv) {
       fmt::print(stderr, "unknown option {}\n", flag);
       std::exit(2);
     }
+  }
+  if (args.oracle_measured && args.oracle_cv_constants) {
+    throw std::invalid_argument("--oracle-constants reads the true states; not with --oracle-states measured");
   }
   if (args.seed_list == "acceptance") args.seeds = sim::acceptance_law_seeds();
   else if (args.seed_list == "development") args.seeds = sim::development_law_seeds();
@@ -357,6 +378,132 @@ OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& reg
   return rows;
 }
 
+// Least squares on scaled columns; a regressor the law does not have is a column of zeros,
+// which the rank-revealing QR leaves at zero.
+Eigen::VectorXd oracle_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
+  Eigen::VectorXd scale = x.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < scale.size(); ++j) {
+    if (scale[j] == 0) scale[j] = 1;
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(x * scale.cwiseInverse().asDiagonal());
+  qr.setThreshold(1e-12);
+  return scale.cwiseInverse().asDiagonal() * Eigen::VectorXd(qr.solve(y));
+}
+
+// --oracle-constants cv|cv-pooled|fit: the law's forms with its constants chosen by the data. Each axis'
+// thermal and hysteresis constants (the case's and the chain's time constants, the tanh
+// step's centre and width, the radial gradient's lag, the memory's time constant and rate
+// scale, the play's width, the turn-on's time constant; not the back coupling or the
+// self-heating) move, from the law's own values, by a coordinate pattern search (steps of
+// 2^±1/2, 2^±1/4, 2^±1/8; the step's centre ±4, 2, 1 °C; time constants up to a quarter of
+// the training log's span, widths and rate scales within broad bounds) while the
+// least-squares fit's blocked 10-fold CV on the training cycle falls, scored as the searches
+// score (the geometric mean of the blocks' MSEs; every 10th smoothed row; `cv-pooled`: their
+// pooled MSE; `fit`: the in-sample MSE, a prediction-error fit). The states are the true
+// ones of the moved unit, driven by the chamber air; with two training logs, their rows
+// follow each other in the CV's blocks. Started at the truth, the search finds the score's
+// local minimum nearest it: what choosing the constants from one noisy cycle costs a method
+// that knows every form, at best (docs/generalization.md, "What choosing the constants costs").
+struct ChosenConstants {
+  sim::UnitLaw unit;          // the law with axis `axis`'s constants (and the case's) moved
+  std::vector<std::string> moves;  // "name:law->chosen" for each constant that moved
+};
+
+ChosenConstants choose_constants(const sim::UnitLaw& law,
+                                       const std::vector<std::pair<const sim::Setpoint*, const sim::ChamberRun*>>& logs,
+                                       std::size_t axis, ConstantsScore by) {
+  struct Constant {
+    std::string name;
+    double* value;
+    bool additive;  // °C steps (the step's centre), else steps in log2
+    double low = 0, high = std::numeric_limits<double>::infinity();  // log steps stay within [low, high]
+  };
+  ChosenConstants chosen{law, {}};
+  sim::AxisLaw& a = chosen.unit.axes[axis];
+  // Time constants up to a quarter of the first log's span, as the searches allow.
+  const double longest = 0.25 * static_cast<double>(logs.front().second->rows()) / logs.front().second->rate_hz;
+  std::vector<Constant> constants{{"case_s", &chosen.unit.case_time_constant_s, false, 2, longest}};
+  for (std::size_t k = 0; k < a.node_time_constants_s.size(); ++k) {
+    constants.push_back({fmt::format("node{}_s", k), &a.node_time_constants_s[k], false, 2, longest});
+  }
+  if (a.shape == sim::StaticShape::tanh_step && a.step_dph != 0) {
+    constants.push_back({"step_centre_c", &a.step_centre_c, true});
+    constants.push_back({"step_width_c", &a.step_width_c, false, 0.5, 200});
+  }
+  if (a.radial_gradient_rate_dph != 0) constants.push_back({"radial_s", &a.radial_time_constant_s, false, 2, longest});
+  if (a.hysteresis == sim::HysteresisKind::memory) {
+    constants.push_back({"memory_s", &a.hysteresis_time_constant_s, false, 2, longest});
+    constants.push_back({"memory_r0", &a.hysteresis_rate_scale, false, 0.01, 2});
+  }
+  if (a.hysteresis == sim::HysteresisKind::play) constants.push_back({"play_w", &a.hysteresis_width_c, false, 0.05, 20});
+  if (a.turn_on_dph != 0) constants.push_back({"turn_on_s", &a.turn_on_time_constant_s, false, 2, longest});
+  std::vector<double> original;
+  for (const auto& c : constants) original.push_back(*c.value);
+
+  constexpr Eigen::Index kEvery = 10;
+  const auto score = [&] {
+    std::vector<OracleRows> parts;  // each log's rows (a prefix of its programme's)
+    Eigen::Index n = 0;
+    for (const auto& [programme, run] : logs) {
+      parts.push_back(oracle_rows(*run, slice(sim::law_regressors(chosen.unit, *programme), 0, run->rows()), axis, false));
+      n += (parts.back().y.size() + kEvery - 1) / kEvery;
+    }
+    Eigen::MatrixXd x(n, static_cast<Eigen::Index>(sim::kLawRegressors));
+    Eigen::VectorXd y(n);
+    Eigen::Index row = 0;
+    for (const OracleRows& part : parts) {
+      for (Eigen::Index k = 0; k < part.y.size(); k += kEvery, ++row) {
+        x.row(row) = part.x.row(k);
+        y[row] = part.y[k];
+      }
+    }
+    if (by == ConstantsScore::in_sample) return (y - x * oracle_least_squares(x, y)).squaredNorm();
+    double log_sum = 0, sum = 0;
+    const auto blocks = blocked_folds(n, 10);
+    for (const SampleRange& block : blocks) {
+      const Eigen::VectorXd beta = oracle_least_squares(rows_except(x, block), rows_except(y, block));
+      const Eigen::Index begin = block.begin, size = block.end - block.begin;
+      const double squares = (y.segment(begin, size) - x.middleRows(begin, size) * beta).squaredNorm();
+      log_sum += std::log(squares / static_cast<double>(size));
+      sum += squares;
+    }
+    return by == ConstantsScore::pooled ? sum : std::exp(log_sum / static_cast<double>(blocks.size()));
+  };
+  double best = score();
+  for (const double step : {0.5, 0.25, 0.125}) {
+    bool moved = true;
+    while (moved && !interrupted.load()) {
+      moved = false;
+      for (const auto& c : constants) {
+        for (const double sign : {1.0, -1.0}) {
+          for (;;) {
+            const double before = *c.value;
+            *c.value = c.additive ? before + sign * 8 * step : before * std::exp2(sign * step);
+            if (!c.additive && (*c.value < std::min(c.low, before) || *c.value > std::max(c.high, before))) {
+              *c.value = before;
+              break;
+            }
+            const double trial = score();
+            if (trial < best) {
+              best = trial;
+              moved = true;
+            } else {
+              *c.value = before;
+              break;
+            }
+          }
+        }
+      }
+    }
+  }
+  for (std::size_t k = 0; k < constants.size(); ++k) {
+    if (*constants[k].value != original[k]) {
+      chosen.moves.push_back(fmt::format("{}:{:.4g}->{:.4g}", constants[k].name, original[k], *constants[k].value));
+    }
+  }
+  return chosen;
+}
+
 // The law's own structure on its true states, fitted by least squares on the training rows:
 // no identification error at all, only the coefficients left to one training log. What it
 // leaves held out is what the training log cannot tell apart (near-collinear terms under
@@ -390,17 +537,8 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
       y.segment(row, part.y.size()) = part.y;
       row += part.y.size();
     }
-    // Scaled columns; a regressor the law does not have is a column of zeros, which the
-    // rank-revealing QR leaves at zero.
-    Eigen::VectorXd scale = x.colwise().norm().transpose();
-    for (Eigen::Index j = 0; j < scale.size(); ++j) {
-      if (scale[j] == 0) scale[j] = 1;
-    }
     for (const std::size_t j : without) x.col(static_cast<Eigen::Index>(j)).setZero();
-    const Eigen::MatrixXd scaled = x * scale.cwiseInverse().asDiagonal();
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(scaled);
-    qr.setThreshold(1e-12);
-    const Eigen::VectorXd beta = scale.cwiseInverse().asDiagonal() * Eigen::VectorXd(qr.solve(y));
+    const Eigen::VectorXd beta = oracle_least_squares(x, y);
     result.in_sample[a] = (y - x * beta).squaredNorm() / static_cast<double>(n) / training_floor[a];
     // The same fit against the noise-free drift of the training rows (the same rows as y
     // when on_drift).
@@ -582,14 +720,6 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     }
     law.air_rate_intensity = air_rate_intensity;
   }
-  auto regressors_of = [&](const sim::Setpoint& programme, const sim::ChamberRun& run) {
-    if (!oracle) return sim::LawRegressors{};
-    if (args.oracle_measured) {
-      return sim::law_regressors_from_thermometers(unit, run, air_rate_intensity, args.oracle_lookahead).regressors;
-    }
-    return sim::law_regressors(unit, programme);
-  };
-  const sim::LawRegressors training_regressors = regressors_of(training_programme, training_run);
   // --training-noise K: cycle 1 of the same programme with another noise draw (ARW, bias
   // instability, thermometer noise); the next cycle is still judged on the run above.
   const auto training_draw = [&](std::uint64_t draw) {
@@ -600,18 +730,47 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
   };
   const sim::ChamberRun first = training_draw(args.training_noise);
   const bool first_is_cycle_1 = args.training_noise == 0 && args.training_quiet.empty();
+  sim::Setpoint second_programme;
+  sim::ChamberRun second_run;
+  if (args.two_runs) {
+    second_programme = sim::draw_profile(second_training_profile(seed), unit, sim::derive_seed(seed, 14));
+    second_run = simulate(unit, second_programme, sim::derive_seed(seed, 4), args.chamber_air, args.gyro_delay);
+  }
+  // --oracle-constants cv|cv-pooled|fit: each axis' states from its own unit, its constants
+  // chosen on the training log(s).
+  std::array<sim::UnitLaw, 3> oracle_units{unit, unit, unit};
+  std::array<std::vector<std::string>, 3> oracle_moves;
+  if (oracle && args.oracle_cv_constants) {
+    std::vector<std::pair<const sim::Setpoint*, const sim::ChamberRun*>> logs{{&training_programme, &first}};
+    if (args.two_runs) logs.emplace_back(&second_programme, &second_run);
+    for (std::size_t a = 0; a < 3; ++a) {
+      ChosenConstants chosen = choose_constants(unit, logs, a, args.oracle_constants_score);
+      oracle_units[a] = std::move(chosen.unit);
+      oracle_moves[a] = std::move(chosen.moves);
+    }
+  }
+  auto regressors_of = [&](const sim::Setpoint& programme, const sim::ChamberRun& run) {
+    if (!oracle) return sim::LawRegressors{};
+    if (args.oracle_cv_constants) {
+      sim::LawRegressors combined;
+      for (std::size_t a = 0; a < 3; ++a) combined[a] = std::move(sim::law_regressors(oracle_units[a], programme)[a]);
+      return combined;
+    }
+    if (args.oracle_measured) {
+      return sim::law_regressors_from_thermometers(unit, run, air_rate_intensity, args.oracle_lookahead).regressors;
+    }
+    return sim::law_regressors(unit, programme);
+  };
+  const sim::LawRegressors training_regressors = regressors_of(training_programme, training_run);
   const sim::LawRegressors first_regressors =
       !oracle ? sim::LawRegressors{}
       : args.oracle_measured && !first_is_cycle_1 ? regressors_of(training_programme, first)
                                                   : slice(training_regressors, 0, second_cycle);
   std::vector<ChamberLog> training{log_of(first)};
   std::vector<std::pair<const sim::ChamberRun*, const sim::LawRegressors*>> oracle_training{{&first, &first_regressors}};
-  sim::ChamberRun second_run;
   sim::LawRegressors second_regressors;
   if (args.two_runs) {
-    const sim::Setpoint programme = sim::draw_profile(second_training_profile(seed), unit, sim::derive_seed(seed, 14));
-    second_run = simulate(unit, programme, sim::derive_seed(seed, 4), args.chamber_air, args.gyro_delay);
-    second_regressors = regressors_of(programme, second_run);
+    second_regressors = regressors_of(second_programme, second_run);
     training.push_back(log_of(second_run));
     oracle_training.emplace_back(&second_run, &second_regressors);
   }
@@ -644,6 +803,9 @@ LawResult run_law(std::uint64_t seed, const Arguments& args) {
     if (interrupted.load()) break;
     if (method == Method::oracle) {
       law.methods.push_back(fit_oracle(oracle_training, training_floor, tests, args.oracle_without, args.oracle_on_drift));
+      for (std::size_t a = 0; a < 3; ++a) {
+        law.methods.back().terms[a].insert(law.methods.back().terms[a].end(), oracle_moves[a].begin(), oracle_moves[a].end());
+      }
       continue;
     }
     MethodResult result;
