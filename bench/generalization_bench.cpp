@@ -378,6 +378,32 @@ OracleRows oracle_rows(const sim::ChamberRun& run, const sim::LawRegressors& reg
   return rows;
 }
 
+// The rows of several logs one after the other, every `every`-th of each log.
+OracleRows stacked(const std::vector<OracleRows>& parts, Eigen::Index every = 1) {
+  Eigen::Index n = 0;
+  for (const auto& part : parts) n += (part.y.size() + every - 1) / every;
+  OracleRows all{Eigen::MatrixXd(n, static_cast<Eigen::Index>(sim::kLawRegressors)), Eigen::VectorXd(n)};
+  Eigen::Index row = 0;
+  for (const auto& part : parts) {
+    for (Eigen::Index k = 0; k < part.y.size(); k += every, ++row) {
+      all.x.row(row) = part.x.row(k);
+      all.y[row] = part.y[k];
+    }
+  }
+  return all;
+}
+
+// The programme up to `seconds` (its knots to the first at or past seconds + 1 s): the same
+// air up to there, so a unit run through it gives the same rows, without the rest.
+sim::Setpoint programme_prefix(const sim::Setpoint& programme, double seconds) {
+  sim::Setpoint prefix = programme;
+  std::size_t knots = 0;
+  while (knots < programme.time_s.size() && (knots == 0 || programme.time_s[knots - 1] < seconds + 1)) ++knots;
+  prefix.time_s.resize(knots);
+  prefix.temperature_c.resize(knots);
+  return prefix;
+}
+
 // Least squares on scaled columns; a regressor the law does not have is a column of zeros,
 // which the rank-revealing QR leaves at zero.
 Eigen::VectorXd oracle_least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
@@ -440,26 +466,21 @@ ChosenConstants choose_constants(const sim::UnitLaw& law,
   std::vector<double> original;
   for (const auto& c : constants) original.push_back(*c.value);
 
-  constexpr Eigen::Index kEvery = 10;
+  // Each log's rows are a prefix of its programme's: only that much is simulated.
+  std::vector<sim::Setpoint> programmes;
+  for (const auto& [programme, run] : logs) {
+    programmes.push_back(programme_prefix(*programme, static_cast<double>(run->rows()) / run->rate_hz));
+  }
   const auto score = [&] {
-    std::vector<OracleRows> parts;  // each log's rows (a prefix of its programme's)
-    Eigen::Index n = 0;
-    for (const auto& [programme, run] : logs) {
-      parts.push_back(oracle_rows(*run, slice(sim::law_regressors(chosen.unit, *programme), 0, run->rows()), axis, false));
-      n += (parts.back().y.size() + kEvery - 1) / kEvery;
+    std::vector<OracleRows> parts;
+    for (std::size_t i = 0; i < logs.size(); ++i) {
+      const sim::ChamberRun& run = *logs[i].second;
+      parts.push_back(oracle_rows(run, slice(sim::law_regressors(chosen.unit, programmes[i]), 0, run.rows()), axis, false));
     }
-    Eigen::MatrixXd x(n, static_cast<Eigen::Index>(sim::kLawRegressors));
-    Eigen::VectorXd y(n);
-    Eigen::Index row = 0;
-    for (const OracleRows& part : parts) {
-      for (Eigen::Index k = 0; k < part.y.size(); k += kEvery, ++row) {
-        x.row(row) = part.x.row(k);
-        y[row] = part.y[k];
-      }
-    }
+    const auto [x, y] = stacked(parts, 10);
     if (by == ConstantsScore::in_sample) return (y - x * oracle_least_squares(x, y)).squaredNorm();
     double log_sum = 0, sum = 0;
-    const auto blocks = blocked_folds(n, 10);
+    const auto blocks = blocked_folds(y.size(), 10);
     for (const SampleRange& block : blocks) {
       const Eigen::VectorXd beta = oracle_least_squares(rows_except(x, block), rows_except(y, block));
       const Eigen::Index begin = block.begin, size = block.end - block.begin;
@@ -524,19 +545,9 @@ MethodResult fit_oracle(const std::vector<std::pair<const sim::ChamberRun*, cons
   result.tests.resize(tests.size());
   for (std::size_t a = 0; a < 3; ++a) {
     std::vector<OracleRows> parts;
-    Eigen::Index n = 0;
-    for (const auto& [run, regressors] : training) {
-      parts.push_back(oracle_rows(*run, *regressors, a, on_drift));
-      n += parts.back().y.size();
-    }
-    Eigen::MatrixXd x(n, sim::kLawRegressors);
-    Eigen::VectorXd y(n);
-    Eigen::Index row = 0;
-    for (const auto& part : parts) {
-      x.middleRows(row, part.y.size()) = part.x;
-      y.segment(row, part.y.size()) = part.y;
-      row += part.y.size();
-    }
+    for (const auto& [run, regressors] : training) parts.push_back(oracle_rows(*run, *regressors, a, on_drift));
+    auto [x, y] = stacked(parts);
+    const Eigen::Index n = y.size();
     for (const std::size_t j : without) x.col(static_cast<Eigen::Index>(j)).setZero();
     const Eigen::VectorXd beta = oracle_least_squares(x, y);
     result.in_sample[a] = (y - x * beta).squaredNorm() / static_cast<double>(n) / training_floor[a];
